@@ -1,0 +1,1 @@
+"""Shipped data: meshes, robot and object assets, pretrained models (package data)."""

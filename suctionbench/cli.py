@@ -1,0 +1,266 @@
+"""The `suctionbench` command line: parse, call the library, print (rich) or --json.
+
+Contract (DESIGN.md): with --json, the last stdout line is exactly one JSON object and human
+output goes to stderr; exit 0 on success, 2 on bad input (one line naming the input and the
+problem), 1 on an internal failure. Long work shows a progress bar on a terminal only.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+import traceback
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import replace
+from pathlib import Path
+from typing import Annotated, Any
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.table import Table
+
+from suctionbench import __version__
+from suctionbench.errors import InputError
+
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=True,
+    help="Robust suction grasp labels, datasets, GQ-CNN policies and a MuJoCo benchmark.",
+)
+bench_app = typer.Typer(no_args_is_help=True, help="Speed figures, each timed against its reference in one run.")
+app.add_typer(bench_app, name="bench")
+
+err = Console(stderr=True)
+
+JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object on the last stdout line.")]
+SeedOpt = Annotated[int, typer.Option("--seed", help="Seed of every random draw.")]
+
+MAX_GRASP_OFFSET = 0.005
+"""A --grasp point farther than this (m) from the mesh surface is rejected as a typo."""
+
+
+def _emit(result: dict[str, Any], as_json: bool) -> None:
+    if as_json:
+        print(json.dumps(result, sort_keys=False))
+
+
+def _run(as_json: bool, body: Callable[[], dict[str, Any]]) -> None:
+    """Run a command body under the CLI contract (exit codes, JSON on the last line)."""
+    try:
+        result = body()
+    except InputError as exc:
+        err.print(f"[bold red]error:[/] {exc}", highlight=False)
+        _emit({"ok": False, "error": str(exc)}, as_json)
+        raise typer.Exit(2) from None
+    except typer.Exit:
+        raise
+    except Exception as exc:  # an internal failure: say so, with the traceback on stderr
+        err.print(f"[bold red]internal error:[/] {type(exc).__name__}: {exc}", highlight=False)
+        traceback.print_exc(file=sys.stderr)
+        _emit({"ok": False, "error": f"internal: {type(exc).__name__}: {exc}"}, as_json)
+        raise typer.Exit(1) from None
+    _emit({"ok": True, **result}, as_json)
+
+
+@contextmanager
+def _progress(total: int, label: str, enabled: bool) -> Iterator[Callable[[int], None]]:
+    """A rich progress bar on an interactive stderr; a no-op callback otherwise."""
+    if not enabled or not err.is_terminal:
+        yield lambda _n: None
+        return
+    columns = (TextColumn(label), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
+    with Progress(*columns, console=err, transient=True) as bar:
+        task = bar.add_task(label, total=total)
+        yield lambda n: bar.advance(task, n)
+
+
+def parse_vector(text: str, size: int, what: str) -> np.ndarray:
+    """Parse 'a,b,c' into a finite float vector of `size`, or raise InputError naming `what`."""
+    try:
+        values = np.array([float(x) for x in text.split(",")], dtype=float)
+    except ValueError:
+        raise InputError(f"{what} '{text}': expected {size} comma-separated numbers") from None
+    if values.shape != (size,):
+        raise InputError(f"{what} '{text}': expected {size} comma-separated numbers, got {len(values)}")
+    if not np.all(np.isfinite(values)):
+        raise InputError(f"{what} '{text}': values must be finite")
+    return values
+
+
+@app.command()
+def version(as_json: JsonOpt = False) -> None:
+    """Print the suctionbench version."""
+    _run(as_json, lambda: {"version": __version__})
+    if not as_json:
+        print(__version__)
+
+
+@app.command()
+def label(
+    mesh: Annotated[str, typer.Argument(help="Mesh file (OBJ, STL, PLY, OFF, GLB).")],
+    grasp: Annotated[
+        str | None, typer.Option(help="One grasp 'x,y,z,vx,vy,vz': target point and unit approach.")
+    ] = None,
+    grasps: Annotated[int | None, typer.Option(help="Sample N grasp candidates on the surface.")] = None,
+    mass: Annotated[float, typer.Option(help="Object mass in kg (the paper assumes 1.0 when unknown).")] = 1.0,
+    com: Annotated[str | None, typer.Option(help="Centre of mass 'x,y,z' (default: from the mesh).")] = None,
+    units: Annotated[str, typer.Option(help="Units of the mesh file: m, cm or mm.")] = "m",
+    cup: Annotated[str, typer.Option(help="Cup preset: default or paper.")] = "default",
+    samples: Annotated[int, typer.Option(help="Monte-Carlo samples J per grasp.")] = 50,
+    out: Annotated[Path | None, typer.Option(help="With --grasps: write labels to this .npz.")] = None,
+    top: Annotated[int, typer.Option(help="With --grasps: rows in the table of best grasps.")] = 10,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Label suction grasps on a mesh with the Dex-Net 3.0 compliant suction contact model."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.config import LabelConfig, PerturbationConfig, cup_preset
+        from suctionbench.contact import SuctionLabeller
+        from suctionbench.contact.summary import batch_summary, grasp_record, save_labels
+        from suctionbench.geometry.mesh import load_mesh
+        from suctionbench.geometry.sampling import sample_surface_grasps
+
+        if (grasp is None) == (grasps is None):
+            raise InputError("give exactly one of --grasp x,y,z,vx,vy,vz or --grasps N")
+        if grasps is not None and grasps < 1:
+            raise InputError(f"--grasps {grasps}: must be at least 1")
+        if out is not None and grasps is None:
+            raise InputError("--out needs --grasps (a single --grasp is printed, not written)")
+        if top < 0:
+            raise InputError(f"--top {top}: must be >= 0")
+        config = LabelConfig(
+            cup=cup_preset(cup), perturbation=replace(PerturbationConfig(), num_samples=samples)
+        )
+        info = load_mesh(mesh, units=units)
+        com_vec = parse_vector(com, 3, "--com") if com is not None else None
+        labeller = SuctionLabeller(info, config, mass=mass, com=com_vec)
+        warnings = list(info.warnings)
+        if mass > config.cup.payload_kg:
+            warnings.append(
+                f"mass {mass:g} kg exceeds the '{config.cup.name}' cup's vacuum payload "
+                f"{config.cup.payload_kg:.3g} kg: no grasp can hold it (pass --mass)"
+            )
+        for line in warnings:
+            err.print(f"[yellow]warning:[/] {line}", highlight=False)
+
+        if grasp is not None:
+            values = parse_vector(grasp, 6, "--grasp")
+            point, approach = values[:3], values[3:]
+            norm = float(np.linalg.norm(approach))
+            if abs(norm - 1.0) > 1e-3:
+                raise InputError(f"--grasp approach {approach.tolist()}: length {norm:.4g}, must be a unit vector")
+            approach = approach / norm
+            _, distance, _ = info.mesh.nearest.on_surface(point[None])
+            if distance[0] > MAX_GRASP_OFFSET:
+                raise InputError(
+                    f"--grasp point {point.tolist()} is {distance[0] * 1e3:.1f} mm from the surface of "
+                    f"'{mesh}' (at most {MAX_GRASP_OFFSET * 1e3:g} mm)"
+                )
+            labels = labeller.label(point[None], approach[None], seed)
+            record = grasp_record(labels, 0)
+            if not as_json:
+                _print_record(record)
+            return {**record, "mass": mass, "cup": config.cup.name, "samples": samples,
+                    "seed": seed, "warnings": warnings}
+
+        rng = np.random.default_rng(seed)
+        points, approaches = sample_surface_grasps(info.mesh, grasps, rng)
+        start = time.perf_counter()
+        with _progress(grasps, "labelling", not as_json) as advance:
+            labels = labeller.label(points, approaches, seed, progress=advance)
+        elapsed = time.perf_counter() - start
+        summary = batch_summary(labels)
+        summary["seconds"] = round(elapsed, 3)
+        summary["grasps_per_second"] = round(grasps / elapsed, 1)
+        if out is not None:
+            save_labels(out, labels)
+            summary["out"] = str(out)
+        if not as_json:
+            _print_batch(labels, summary, top, mesh)
+        return {**summary, "mass": mass, "cup": config.cup.name, "seed": seed, "warnings": warnings}
+
+    _run(as_json, body)
+
+
+def _print_record(record: dict[str, Any]) -> None:
+    table = Table(title="suction grasp label", show_header=False)
+    for key, value in record.items():
+        if isinstance(value, float):
+            value = f"{value:.4g}"
+        elif isinstance(value, list):
+            value = ", ".join("-" if v is None else f"{v:.4g}" for v in value)
+        table.add_row(key, str(value))
+    Console().print(table)
+
+
+def _print_batch(labels: Any, summary: dict[str, Any], top: int, mesh: str) -> None:
+    console = Console()
+    head = Table(title=f"labels for {mesh}", show_header=False)
+    for key, value in summary.items():
+        head.add_row(key, f"{value:.3f}" if isinstance(value, float) else str(value))
+    console.print(head)
+    if top == 0:
+        return
+    order = np.lexsort((-labels.score("ss"), -labels.rwr))[:top]
+    best = Table(title=f"top {len(order)} grasps by robust wrench resistance")
+    for col in ("#", "point (mm)", "approach", "seal", "stretch", "wr", "rwr", "pc3d"):
+        best.add_column(col, justify="right")
+    for i in order:
+        p, v = labels.points[i] * 1e3, labels.approaches[i]
+        best.add_row(
+            str(i),
+            f"{p[0]:.1f}, {p[1]:.1f}, {p[2]:.1f}",
+            f"{v[0]:.2f}, {v[1]:.2f}, {v[2]:.2f}",
+            "yes" if labels.seal.seal[i] else (labels.seal.failure_names[i] or ""),
+            f"{labels.seal.max_stretch[i]:.3f}",
+            "yes" if labels.wr[i] else "no",
+            f"{labels.rwr[i]:.2f}",
+            f"{labels.score('pc3d')[i]:.2f}",
+        )
+    console.print(best)
+
+
+@bench_app.command("label")
+def bench_label(
+    mesh: Annotated[str | None, typer.Option(help="Mesh to label (default: the shipped ~10k-face soap bar).")] = None,
+    mass: Annotated[float, typer.Option(help="Object mass in kg.")] = 0.15,
+    grasps: Annotated[int, typer.Option(help="Grasps labelled by the fast path.")] = 1000,
+    reference_grasps: Annotated[int, typer.Option(help="Of those, grasps also labelled by the reference.")] = 20,
+    samples: Annotated[int, typer.Option(help="Monte-Carlo samples J per grasp.")] = 50,
+    memory_grasps: Annotated[int, typer.Option(help="Grasps in the peak-memory run.")] = 10000,
+    cores: Annotated[int, typer.Option(help="CPU cores the process may use (0 = all).")] = 1,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Robust labels/s of the vectorised path vs the per-sample reference (one QP and one
+    ray-cast pass per sample), their agreement, and peak memory."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.bench import bench_label as run_bench
+
+        result = run_bench(
+            mesh=mesh, mass=mass, grasps=grasps, reference_grasps=reference_grasps, samples=samples,
+            memory_grasps=memory_grasps, cores=cores, seed=seed,
+        )
+        if not as_json:
+            table = Table(title="bench label: vectorised vs reference", show_header=False)
+            for key, value in result.items():
+                table.add_row(key, f"{value:.4g}" if isinstance(value, float) else str(value))
+            Console().print(table)
+        return result
+
+    _run(as_json, body)
+
+
+def main() -> None:
+    """Console-script entry point."""
+    app()
+
+
+if __name__ == "__main__":
+    main()

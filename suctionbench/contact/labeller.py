@@ -1,0 +1,148 @@
+"""One object, one cup: the entry point that ties seal, wrench and robust models together."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+import trimesh
+
+from suctionbench.config import STANDARD_GRAVITY, LabelConfig
+from suctionbench.contact.metrics import METRICS, GraspLabels
+from suctionbench.contact.robust import ObjectState, robust_wrench_resistance
+from suctionbench.contact.seal import SealModel, SealResult
+from suctionbench.contact.wrench import external_wrench_at_contact, resists
+from suctionbench.errors import InputError
+from suctionbench.geometry.frames import approach_frames
+from suctionbench.geometry.mesh import MeshInfo, validate_mesh
+from suctionbench.geometry.raycast import RayCaster
+
+DEFAULT_MASS = 1.0
+"""Mass (kg) assumed when the object's mass is unknown, as in the paper."""
+
+
+class SuctionLabeller:
+    """Labels suction grasps (p, v) on one mesh (in its own frame, metres) with one cup.
+
+    Grasp frames take their x axis from the direction to the centre of mass, so labels move with
+    the object under rigid motions (when gravity moves with it too).
+    """
+
+    def __init__(
+        self,
+        mesh: MeshInfo | trimesh.Trimesh,
+        config: LabelConfig | None = None,
+        *,
+        mass: float = DEFAULT_MASS,
+        com: np.ndarray | None = None,
+        gravity: np.ndarray | tuple[float, float, float] = (0.0, 0.0, -STANDARD_GRAVITY),
+    ):
+        self.info = mesh if isinstance(mesh, MeshInfo) else validate_mesh(mesh)
+        self.config = config or LabelConfig()
+        if not (isinstance(mass, (int, float)) and math.isfinite(mass) and mass > 0):
+            raise InputError(f"mass {mass!r}: must be a positive number of kilograms")
+        com = self.info.center_mass if com is None else np.asarray(com, dtype=float)
+        if com.shape != (3,) or not np.all(np.isfinite(com)):
+            raise InputError(f"centre of mass {com.tolist()!r}: must be three finite numbers")
+        gravity = np.asarray(gravity, dtype=float)
+        if gravity.shape != (3,) or not np.all(np.isfinite(gravity)):
+            raise InputError(f"gravity {gravity.tolist()!r}: must be three finite numbers")
+        self.object = ObjectState(com=com, mass=float(mass), gravity=gravity)
+        self.caster = RayCaster(self.info.mesh)
+        self.seal_model = SealModel(self.caster, self.config.cup, self.config.seal)
+
+    @property
+    def mesh(self) -> trimesh.Trimesh:
+        """The labelled mesh."""
+        return self.info.mesh
+
+    def frames(self, points: np.ndarray, approaches: np.ndarray) -> np.ndarray:
+        """Grasp frames (N, 3, 3): z = approach, x toward the centre of mass in the cup plane."""
+        points, approaches = _check_grasps(points, approaches)
+        return approach_frames(approaches, self.object.com - points)
+
+    def seal(self, points: np.ndarray, approaches: np.ndarray) -> SealResult:
+        """Nominal seal model for each grasp."""
+        points, approaches = _check_grasps(points, approaches)
+        return self.seal_model.evaluate(points, self.frames(points, approaches))
+
+    def wrench_resistance(
+        self, points: np.ndarray, approaches: np.ndarray, seal: SealResult | None = None
+    ) -> np.ndarray:
+        """Nominal (unperturbed) wrench resistance against gravity: seal and resist."""
+        points, approaches = _check_grasps(points, approaches)
+        frames = self.frames(points, approaches)
+        seal = seal or self.seal_model.evaluate(points, frames)
+        force = np.broadcast_to(self.object.gravity_force, points.shape)
+        com = np.broadcast_to(self.object.com, points.shape)
+        wrench = external_wrench_at_contact(force, com, seal.ring_centre, frames)
+        return seal.seal & resists(wrench, self.config.cup.friction, self.config.cup)
+
+    def robust(
+        self,
+        points: np.ndarray,
+        approaches: np.ndarray,
+        seed: int,
+        *,
+        grasp_ids: np.ndarray | None = None,
+        reference: bool = False,
+        progress: Callable[[int], None] | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Robust wrench resistance per grasp, and the (N, J) sample outcomes behind it."""
+        points, approaches = _check_grasps(points, approaches)
+        return robust_wrench_resistance(
+            self.seal_model, points, self.frames(points, approaches), self.object,
+            self.config.perturbation, seed, grasp_ids=grasp_ids, reference=reference,
+            progress=progress,
+        )
+
+    def label(
+        self,
+        points: np.ndarray,
+        approaches: np.ndarray,
+        seed: int,
+        *,
+        metrics: tuple[str, ...] = tuple(METRICS),
+        grasp_ids: np.ndarray | None = None,
+        progress: Callable[[int], None] | None = None,
+    ) -> GraspLabels:
+        """Every requested metric for each grasp (the robust one only when asked for)."""
+        unknown = [m for m in metrics if m not in METRICS]
+        if unknown:
+            raise InputError(f"metric '{unknown[0]}' is unknown (known: {', '.join(METRICS)})")
+        points, approaches = _check_grasps(points, approaches)
+        seal = self.seal(points, approaches)
+        rwr, samples = (None, None)
+        if "rwr" in metrics:
+            rwr, samples = self.robust(points, approaches, seed, grasp_ids=grasp_ids, progress=progress)
+        return GraspLabels(
+            points=points,
+            approaches=approaches,
+            seal=seal,
+            wr=self.wrench_resistance(points, approaches, seal),
+            rwr=rwr,
+            samples=samples,
+            com=self.object.com,
+            config=self.config,
+        )
+
+
+def _check_grasps(points: np.ndarray, approaches: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Validate grasp arrays: (N, 3) finite points and unit approach vectors."""
+    points = np.atleast_2d(np.asarray(points, dtype=float))
+    approaches = np.atleast_2d(np.asarray(approaches, dtype=float))
+    if points.shape != approaches.shape or points.ndim != 2 or points.shape[1] != 3:
+        raise InputError(
+            f"grasps: points {points.shape} and approaches {approaches.shape} must both be (N, 3)"
+        )
+    if not (np.all(np.isfinite(points)) and np.all(np.isfinite(approaches))):
+        raise InputError("grasps: points and approaches must be finite (got NaN or inf)")
+    norms = np.linalg.norm(approaches, axis=1)
+    bad = np.flatnonzero(np.abs(norms - 1.0) > 1e-6)
+    if len(bad):
+        raise InputError(
+            f"grasp {bad[0]}: approach vector {approaches[bad[0]].tolist()} has length "
+            f"{norms[bad[0]]:.6g}, must be a unit vector"
+        )
+    return points, approaches

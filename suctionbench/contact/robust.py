@@ -1,0 +1,184 @@
+"""Robust wrench resistance (Dex-Net 3.0, "Robust Wrench Resistance" and "Details of Distributions").
+
+lambda(u, x) = P(seal and resist | u, x) under perturbations of the object pose, the grasp pose,
+the centre of mass, friction and the disturbing wrench, estimated as the mean of J binary samples.
+
+Object-pose perturbations are applied as their inverse to the grasp, so every sample is a grasp
+on the same mesh in the mesh's own frame (one batched ray cast for all grasps x samples), with
+gravity rotated into the perturbed object frame. All perturbations are drawn in the nominal
+grasp's contact frame from a random stream keyed by (seed, grasp id), so a grasp's label does not
+depend on which other grasps share its batch, and labels move with the object under rigid motions.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import ndtr, ndtri
+
+from suctionbench.config import CupConfig, PerturbationConfig
+from suctionbench.contact.seal import SealModel
+from suctionbench.contact.wrench import external_wrench_at_contact, resists, resists_qp
+from suctionbench.geometry.frames import so3_exp
+
+CHUNK_SAMPLES = 8192
+"""Grasp samples evaluated per batch: bounds peak memory (~100 MB) independent of N."""
+
+
+@dataclass
+class ObjectState:
+    """What the wrench model needs to know about the object, in the mesh frame."""
+
+    com: np.ndarray
+    """(3,) centre of mass (m)."""
+
+    mass: float
+    """Mass (kg)."""
+
+    gravity: np.ndarray
+    """(3,) gravitational acceleration in the mesh frame (m/s^2), e.g. (0, 0, -9.81)."""
+
+    @property
+    def gravity_force(self) -> np.ndarray:
+        """(3,) weight m g (N)."""
+        return self.mass * np.asarray(self.gravity, dtype=float)
+
+
+@dataclass
+class GraspSamples:
+    """Perturbed grasps, J per nominal grasp, flattened grasp-major to (N * J, ...)."""
+
+    points: np.ndarray
+    """(N*J, 3) perturbed target points in the mesh frame."""
+
+    frames: np.ndarray
+    """(N*J, 3, 3) perturbed grasp frames in the mesh frame."""
+
+    com: np.ndarray
+    """(N*J, 3) perturbed centres of mass."""
+
+    force: np.ndarray
+    """(N*J, 3) disturbing force (weight plus noise) in the perturbed mesh frame."""
+
+    friction: np.ndarray
+    """(N*J,) friction coefficients."""
+
+
+def truncated_normal(u: np.ndarray, mean: float, std: float, low: float, high: float) -> np.ndarray:
+    """Map uniforms u in [0, 1) to a normal(mean, std) truncated to [low, high] (inverse CDF)."""
+    if std == 0.0:
+        return np.full_like(u, np.clip(mean, low, high))
+    a, b = ndtr((low - mean) / std), ndtr((high - mean) / std)
+    return np.clip(mean + std * ndtri(a + u * (b - a)), low, high)
+
+
+def sample_perturbations(
+    points: np.ndarray,
+    frames: np.ndarray,
+    obj: ObjectState,
+    cup: CupConfig,
+    config: PerturbationConfig,
+    seed: int,
+    grasp_ids: np.ndarray | None = None,
+) -> GraspSamples:
+    """Draw J perturbed grasps per nominal grasp (points (N, 3), frames (N, 3, 3))."""
+    count, j = len(points), config.num_samples
+    ids = np.arange(count) if grasp_ids is None else np.asarray(grasp_ids)
+    noise = np.empty((count, j, 19))
+    for row, gid in enumerate(ids):  # one short stream per grasp: batch-independent labels
+        noise[row] = np.random.default_rng((int(seed), int(gid))).standard_normal((j, 19))
+    noise[:, :, 18] = ndtr(noise[:, :, 18])  # the friction draw, as a uniform
+
+    def in_world(cols: slice, std: float) -> np.ndarray:
+        """Noise drawn in each nominal contact frame, expressed in the mesh frame."""
+        return std * np.einsum("nij,nsj->nsi", frames, noise[:, :, cols])
+
+    grasp_shift = in_world(slice(0, 3), config.grasp_point_std)
+    grasp_rot = so3_exp(in_world(slice(3, 6), config.approach_rotation_std))
+    obj_shift = in_world(slice(6, 9), config.object_translation_std)
+    obj_rot = so3_exp(in_world(slice(9, 12), config.object_rotation_std))
+    com_shift = in_world(slice(12, 15), config.com_std)
+    force_noise = in_world(slice(15, 18), config.force_noise_std)
+
+    com = np.asarray(obj.com, dtype=float)
+    # The object moves by (R_o about the COM, then t_o); the gripper by its own perturbation.
+    # In the perturbed object's frame, the grasp is the inverse object motion applied to it.
+    inv = np.swapaxes(obj_rot, -1, -2)
+    p_world = points[:, None, :] + grasp_shift
+    p_obj = np.einsum("nsij,nsj->nsi", inv, p_world - com - obj_shift) + com
+    f_obj = inv @ grasp_rot @ frames[:, None]
+    force = np.einsum("nsij,j->nsi", inv, obj.gravity_force) + force_noise
+    mu = truncated_normal(
+        noise[:, :, 18], cup.friction, config.friction_std, config.friction_min, config.friction_max
+    )
+    return GraspSamples(
+        points=p_obj.reshape(-1, 3),
+        frames=f_obj.reshape(-1, 3, 3),
+        com=(com + com_shift).reshape(-1, 3),
+        force=force.reshape(-1, 3),
+        friction=mu.reshape(-1),
+    )
+
+
+def evaluate_samples(seal: SealModel, samples: GraspSamples) -> np.ndarray:
+    """Fast path: bool (N*J,) seal-and-resist per sample, staged so rays are cast only where needed."""
+    out = np.zeros(len(samples.points), dtype=bool)
+    cup = seal.cup
+    for start in range(0, len(out), CHUNK_SAMPLES):
+        sl = slice(start, start + CHUNK_SAMPLES)
+        frames, com, force, mu = samples.frames[sl], samples.com[sl], samples.force[sl], samples.friction[sl]
+
+        def gate(idx: np.ndarray, centres: np.ndarray) -> np.ndarray:
+            wrench = external_wrench_at_contact(force[idx], com[idx], centres, frames[idx])
+            return resists(wrench, mu[idx], cup)
+
+        out[sl] = seal.evaluate(samples.points[sl], frames, gate=gate)
+    return out
+
+
+def evaluate_samples_reference(seal: SealModel, samples: GraspSamples) -> np.ndarray:
+    """Reference path: per sample, one full seal evaluation and one QP, in a Python loop."""
+    out = np.zeros(len(samples.points), dtype=bool)
+    for i in range(len(out)):
+        result = seal.evaluate(samples.points[i : i + 1], samples.frames[i : i + 1])
+        if not result.seal[0]:
+            continue
+        out[i], _ = resists_qp(
+            samples.force[i], samples.com[i], result.ring_centre[0], samples.frames[i],
+            float(samples.friction[i]), seal.cup,
+        )
+    return out
+
+
+def robust_wrench_resistance(
+    seal: SealModel,
+    points: np.ndarray,
+    frames: np.ndarray,
+    obj: ObjectState,
+    config: PerturbationConfig,
+    seed: int,
+    *,
+    grasp_ids: np.ndarray | None = None,
+    reference: bool = False,
+    progress: Callable[[int], None] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Robust wrench resistance per grasp and the (N, J) per-sample outcomes behind it.
+
+    `progress`, if given, is called with the number of grasps finished after each chunk.
+
+    Grasps are processed in chunks of about CHUNK_SAMPLES samples, so memory stays flat in N.
+    """
+    count, j = len(points), config.num_samples
+    ids = np.arange(count) if grasp_ids is None else np.asarray(grasp_ids)
+    run = evaluate_samples_reference if reference else evaluate_samples
+    outcomes = np.zeros((count, j), dtype=bool)
+    step = max(1, CHUNK_SAMPLES // j)
+    for start in range(0, count, step):
+        sl = slice(start, start + step)
+        samples = sample_perturbations(points[sl], frames[sl], obj, seal.cup, config, seed, ids[sl])
+        outcomes[sl] = run(seal, samples).reshape(-1, j)
+        if progress is not None:
+            progress(len(samples.points) // j)
+    return outcomes.mean(axis=1), outcomes

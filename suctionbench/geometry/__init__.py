@@ -1,0 +1,1 @@
+"""Geometry: mesh loading and validation, ray casting, rotations and frames, grasp sampling."""

@@ -1,0 +1,117 @@
+"""Mesh loading and validation: every mesh entering suctionbench passes through `load_mesh`.
+
+Bad meshes are rejected with an `InputError` that names the file and the problem; meshes that are
+usable but imperfect (not watertight) load with a warning, because the seal model's hole test
+sees real holes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from suctionbench.errors import InputError
+
+SUPPORTED_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf")
+"""File types suctionbench reads (through trimesh)."""
+
+UNIT_SCALES = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+"""Metres per unit for the `units` argument."""
+
+MIN_EXTENT = 0.005
+"""Smallest plausible object size (m): below this the units are almost certainly wrong."""
+
+MAX_EXTENT = 1.0
+"""Largest plausible object size (m) for a 15 mm suction cup on a tabletop."""
+
+
+@dataclass
+class MeshInfo:
+    """A validated mesh in metres plus what validation noticed."""
+
+    mesh: trimesh.Trimesh
+    """The mesh, in metres."""
+
+    source: str
+    """Where it came from (path or a description), for messages."""
+
+    watertight: bool
+    """True when the surface is closed and consistently oriented (volume and centre of mass valid)."""
+
+    warnings: list[str] = field(default_factory=list)
+    """Non-fatal problems, one line each, naming the mesh."""
+
+    @property
+    def center_mass(self) -> np.ndarray:
+        """Centre of mass for uniform density; the area-weighted centroid if not watertight."""
+        if self.watertight:
+            return np.asarray(self.mesh.center_mass, dtype=float)
+        return np.asarray(self.mesh.centroid, dtype=float)
+
+
+def load_mesh(path: str | Path, units: str = "m") -> MeshInfo:
+    """Read a mesh file, convert it to metres and validate it (see `validate_mesh`)."""
+    path = Path(path)
+    if units not in UNIT_SCALES:
+        raise InputError(f"units '{units}' is unknown (known: {', '.join(UNIT_SCALES)})")
+    if not path.exists():
+        raise InputError(f"mesh '{path}': file not found")
+    if not path.is_file():
+        raise InputError(f"mesh '{path}': not a regular file")
+    if path.suffix.lower() not in SUPPORTED_SUFFIXES:
+        raise InputError(
+            f"mesh '{path}': unsupported format '{path.suffix or '(none)'}' "
+            f"(supported: {', '.join(SUPPORTED_SUFFIXES)})"
+        )
+    try:
+        loaded = trimesh.load(str(path), force="mesh", process=True)
+    except Exception as exc:  # trimesh raises many exception types for malformed files
+        raise InputError(f"mesh '{path}': could not be read ({type(exc).__name__}: {exc})") from None
+    if not isinstance(loaded, trimesh.Trimesh):
+        raise InputError(f"mesh '{path}': file holds no triangle mesh")
+    if UNIT_SCALES[units] != 1.0:
+        loaded.apply_scale(UNIT_SCALES[units])
+    return validate_mesh(loaded, source=str(path))
+
+
+def validate_mesh(mesh: trimesh.Trimesh, source: str = "mesh") -> MeshInfo:
+    """Check a mesh (in metres) for the problems that would make labels meaningless.
+
+    Rejects: no faces, non-finite vertices, zero area, a flat or line-like shape (zero extent along
+    some axis), sizes outside [MIN_EXTENT, MAX_EXTENT]. Warns: not watertight.
+    """
+    vertices = np.asarray(mesh.vertices)
+    if len(mesh.faces) == 0 or len(vertices) == 0:
+        raise InputError(f"mesh '{source}': empty (no faces)")
+    if not np.all(np.isfinite(vertices)):
+        raise InputError(f"mesh '{source}': vertices contain NaN or infinite coordinates")
+    mesh = mesh.copy()
+    mesh.update_faces(mesh.nondegenerate_faces())
+    mesh.remove_unreferenced_vertices()
+    if len(mesh.faces) == 0 or mesh.area <= 0.0:
+        raise InputError(f"mesh '{source}': degenerate (all faces have zero area)")
+    extents = mesh.extents
+    largest = float(extents.max())
+    if float(extents.min()) <= 1e-9 * max(largest, 1e-12):
+        raise InputError(f"mesh '{source}': degenerate (flat: zero extent along one axis)")
+    if largest < MIN_EXTENT or largest > MAX_EXTENT:
+        raise InputError(
+            f"mesh '{source}': absurd scale (largest extent {largest:.4g} m, expected "
+            f"{MIN_EXTENT:g}-{MAX_EXTENT:g} m); pass the right units (mm, cm or m)"
+        )
+    watertight = bool(mesh.is_watertight and mesh.is_winding_consistent)
+    warnings: list[str] = []
+    if watertight:
+        if mesh.volume < 0:
+            mesh.invert()
+        if mesh.volume <= 1e-15:
+            raise InputError(f"mesh '{source}': degenerate (zero volume)")
+    else:
+        warnings.append(
+            f"mesh '{source}' is not watertight: labels treat open edges as holes and the centre "
+            "of mass is the surface centroid"
+        )
+    return MeshInfo(mesh=mesh, source=source, watertight=watertight, warnings=warnings)

@@ -128,14 +128,19 @@ def evaluate_samples(seal: SealModel, samples: GraspSamples) -> np.ndarray:
     cup = seal.cup
     for start in range(0, len(out), CHUNK_SAMPLES):
         sl = slice(start, start + CHUNK_SAMPLES)
-        frames, com, force, mu = samples.frames[sl], samples.com[sl], samples.force[sl], samples.friction[sl]
-
-        def gate(idx: np.ndarray, centres: np.ndarray) -> np.ndarray:
-            wrench = external_wrench_at_contact(force[idx], com[idx], centres, frames[idx])
-            return resists(wrench, mu[idx], cup)
-
-        out[sl] = seal.evaluate(samples.points[sl], frames, gate=gate)
+        gate = _wrench_gate(samples.force[sl], samples.com[sl], samples.frames[sl], samples.friction[sl], cup)
+        out[sl] = seal.evaluate(samples.points[sl], samples.frames[sl], gate=gate)
     return out
+
+
+def _wrench_gate(force: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.ndarray, cup: CupConfig):
+    """The closed-form wrench test as a seal-model gate: it only needs the ring centres."""
+
+    def gate(idx: np.ndarray, centres: np.ndarray) -> np.ndarray:
+        wrench = external_wrench_at_contact(force[idx], com[idx], centres, frames[idx])
+        return resists(wrench, mu[idx], cup)
+
+    return gate
 
 
 def evaluate_samples_reference(seal: SealModel, samples: GraspSamples) -> np.ndarray:

@@ -1,0 +1,198 @@
+"""Wrench resistance against gravity and the robust (Monte-Carlo) label, with derived expectations.
+
+Default cup: V = 50 kPa x pi (7.5 mm)^2 = 8.84 N (payload 0.90 kg), kappa = V / (2 pi), so the
+largest tilting torque about each contact axis is pi r kappa / sqrt(2) = r V / (2 sqrt 2) = 23 mN m.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from conftest import box
+from scipy.spatial.transform import Rotation
+
+from suctionbench.config import STANDARD_GRAVITY, LabelConfig, PerturbationConfig
+from suctionbench.contact import METRICS, SuctionLabeller
+from suctionbench.contact.robust import sample_perturbations
+from suctionbench.contact.wrench import external_wrench_at_contact, resists
+from suctionbench.errors import InputError
+from suctionbench.geometry.sampling import sample_surface_grasps
+from suctionbench.geometry.shapes import superellipsoid
+
+DOWN = np.array([[0.0, 0.0, -1.0]])
+
+
+def test_flat_face_centre_resists_gravity_until_the_payload(cup):
+    # Top-face centre of a box, COM straight below: gravity pulls along v with no torque and no
+    # tangential force, so the only active constraint is suction, f_z = -m g >= -V: resisted iff
+    # m <= V / g = 0.90 kg.
+    mesh = box((0.12, 0.08, 0.04))
+    payload = cup.vacuum_force / STANDARD_GRAVITY
+    for mass, holds in ((0.3, True), (0.99 * payload, True), (1.01 * payload, False), (1.0, False)):
+        labeller = SuctionLabeller(mesh, mass=mass)
+        assert labeller.wrench_resistance([[0, 0, 0.02]], DOWN)[0] == holds, mass
+
+
+def test_long_heavy_bar_drops_off_centre_but_holds_at_its_centre(cup):
+    # A 30 x 4 x 4 cm bar of 0.5 kg (4.9 N < V) gripped on its top (a long side face). At the
+    # centre the COM is on the cup axis: no torque, pull 4.9 N < 8.84 N: held. 10 cm off-centre
+    # the weight exerts 0.10 m x 4.9 N = 0.49 N m about the contact, 21 times the elastic limit
+    # of 23 mN m: the cup peels and the bar drops. Under perturbation the centre grasp still
+    # holds in most samples while the far one never does.
+    labeller = SuctionLabeller(box((0.30, 0.04, 0.04)), mass=0.5)
+    points = np.array([[0.0, 0.0, 0.02], [0.10, 0.0, 0.02]])
+    approaches = np.repeat(DOWN, 2, axis=0)
+    seal = labeller.seal(points, approaches)
+    assert seal.seal.all()  # both are flat-face seals: the failure is the wrench, not the seal
+    assert labeller.wrench_resistance(points, approaches).tolist() == [True, False]
+    torque = 0.10 * 0.5 * STANDARD_GRAVITY
+    limit = math.pi * cup.radius * cup.kappa / math.sqrt(2.0)
+    assert torque > 20 * limit
+    rwr, _ = labeller.robust(points, approaches, seed=3)
+    assert rwr[0] > 0.5 and rwr[1] == 0.0
+
+
+def test_side_grasp_needs_friction_against_gravity(cup):
+    # Grasp on a vertical face, v horizontal: gravity is tangential, so friction must carry it,
+    # sqrt(3) m g <= mu (f_z + V) with f_z = 0 (no load along v): m <= mu V / (sqrt(3) g) = 0.26 kg
+    # at mu = 0.5. The torque about the contact, m g times the 2 cm lever to the COM, must also
+    # stay under the 23 mN m elastic limit: m <= 0.117 kg. So 0.1 kg holds, 0.15 kg does not.
+    mesh = box((0.04, 0.04, 0.04))
+    point, approach = np.array([[0.02, 0.0, 0.0]]), np.array([[-1.0, 0.0, 0.0]])
+    assert SuctionLabeller(mesh, mass=0.10).wrench_resistance(point, approach)[0]
+    assert not SuctionLabeller(mesh, mass=0.15).wrench_resistance(point, approach)[0]
+
+
+@pytest.fixture(scope="module")
+def soap():
+    return superellipsoid((0.10, 0.07, 0.05), exponent=0.3, count=40)
+
+
+def test_same_seed_same_labels_and_batch_independence(soap):
+    labeller = SuctionLabeller(soap, mass=0.15)
+    points, approaches = sample_surface_grasps(soap, 60, np.random.default_rng(0))
+    a, sa = labeller.robust(points, approaches, seed=11)
+    b, sb = labeller.robust(points, approaches, seed=11)
+    np.testing.assert_array_equal(sa, sb)
+    c, _ = labeller.robust(points, approaches, seed=12)
+    assert not np.array_equal(a, c)  # a different seed draws different perturbations
+    # A grasp's label depends on (seed, grasp id) only, not on the batch it is computed in.
+    d, _ = labeller.robust(points[7:9], approaches[7:9], seed=11, grasp_ids=np.array([7, 8]))
+    np.testing.assert_array_equal(a[7:9], d)
+
+
+def test_robust_label_is_the_composition_of_its_parts(soap):
+    # rwr = mean_j [seal_j and resist_j]: recompute each sample's seal with the full (unstaged)
+    # seal model and its wrench test separately, then compose, and compare with the fast path.
+    labeller = SuctionLabeller(soap, mass=0.15)
+    points, approaches = sample_surface_grasps(soap, 40, np.random.default_rng(1))
+    rwr, outcomes = labeller.robust(points, approaches, seed=5)
+    samples = sample_perturbations(
+        points, labeller.frames(points, approaches), labeller.object, labeller.config.cup,
+        labeller.config.perturbation, seed=5,
+    )
+    seal = labeller.seal_model.evaluate(samples.points, samples.frames)
+    wrench = external_wrench_at_contact(samples.force, samples.com, seal.ring_centre, samples.frames)
+    composed = (seal.seal & resists(wrench, samples.friction, labeller.config.cup)).reshape(outcomes.shape)
+    np.testing.assert_array_equal(outcomes, composed)
+    np.testing.assert_array_equal(rwr, composed.mean(axis=1))
+    assert 0.0 < rwr.mean() < 1.0  # both outcomes occur, so the comparison means something
+
+
+def test_reference_path_agrees_with_the_fast_path(soap):
+    labeller = SuctionLabeller(soap, mass=0.15)
+    points, approaches = sample_surface_grasps(soap, 8, np.random.default_rng(2))
+    # include two good top-face grasps so that positives are compared too
+    points = np.vstack([points, [[0.0, 0.0, 0.025], [0.005, 0.0, 0.025]]])
+    approaches = np.vstack([approaches, DOWN, DOWN])
+    fast, fast_samples = labeller.robust(points, approaches, seed=9)
+    ref, ref_samples = labeller.robust(points, approaches, seed=9, reference=True)
+    np.testing.assert_array_equal(fast_samples, ref_samples)
+    assert fast_samples.any()
+
+
+def test_labels_are_invariant_to_a_rigid_motion_of_object_and_grasp(soap):
+    # Moving mesh, grasps, centre of mass and gravity by the same rigid transform changes
+    # nothing physical; frames (x toward the COM) and perturbations (drawn in contact frames)
+    # move along. Only single-precision ray casting (~1e-7 m) differs, so stretches agree to
+    # 1e-4 and discrete outcomes agree except for samples that sit on a threshold.
+    rng = np.random.default_rng(3)
+    points, approaches = sample_surface_grasps(soap, 80, rng)
+    rot = Rotation.random(random_state=4).as_matrix()
+    shift = np.array([0.3, -0.2, 0.5])
+    moved = soap.copy()
+    moved.apply_transform(np.block([[rot, shift[:, None]], [np.zeros((1, 3)), np.ones((1, 1))]]))
+    gravity = np.array([0.0, 0.0, -STANDARD_GRAVITY])
+    a = SuctionLabeller(soap, mass=0.1)
+    b = SuctionLabeller(moved, mass=0.1, com=rot @ a.object.com + shift, gravity=rot @ gravity)
+    la = a.label(points, approaches, seed=21)
+    lb = b.label(points @ rot.T + shift, approaches @ rot.T, seed=21)
+    finite = np.isfinite(la.seal.max_stretch)
+    np.testing.assert_array_equal(finite, np.isfinite(lb.seal.max_stretch))
+    np.testing.assert_allclose(la.seal.max_stretch[finite], lb.seal.max_stretch[finite], atol=1e-4)
+    clear = ~finite | (np.abs(la.seal.max_stretch - 0.1) > 1e-3)
+    np.testing.assert_array_equal(la.seal.seal[clear], lb.seal.seal[clear])
+    np.testing.assert_array_equal(la.wr[clear], lb.wr[clear])
+    assert (la.samples == lb.samples).mean() >= 0.995
+    assert np.abs(la.rwr - lb.rwr).max() <= 0.04
+    assert la.seal.seal.any() and la.rwr.max() > 0
+
+
+def test_metric_scores_are_ordered_and_bounded(soap):
+    labeller = SuctionLabeller(soap, mass=0.15)
+    points, approaches = sample_surface_grasps(soap, 100, np.random.default_rng(4))
+    labels = labeller.label(points, approaches, seed=0)
+    for name in METRICS:
+        score = labels.score(name)
+        assert score.shape == (100,) and np.all((score >= 0) & (score <= 1)), name
+    # SS ranks by stretch, and is 0.5 exactly at the stretch limit (so > 0.5 means "seals" for
+    # the stretch check alone).
+    ss = labels.score("ss")
+    order = np.argsort(labels.seal.max_stretch)
+    assert np.all(np.diff(ss[order]) <= 1e-12)
+    assert np.all((ss > 0.5) == (labels.seal.max_stretch < 0.1))
+    # WR needs a seal, and a robust label above 0 needs some sample to seal.
+    assert not np.any(labels.wr & ~labels.seal.seal)
+    # PC3D is zero on non-planar patches (RMS deviation over 1 mm).
+    assert np.all(labels.score("pc3d")[labels.seal.planarity_rms > 1e-3] == 0.0)
+    with pytest.raises(InputError, match="unknown"):
+        labeller.label(points, approaches, seed=0, metrics=("nope",))
+
+
+def test_paper_preset_uses_the_papers_literal_constants():
+    # V = 250 N: a 5 kg object hangs from a centred top grasp (49 N < 250 N), but kappa = 0.005
+    # allows only pi r kappa / sqrt(2) = 83 uN m of tilting torque, so 1 mm of COM offset under
+    # 1 kg (9.8 mN m) already fails.
+    from suctionbench.config import CUP_PAPER
+
+    mesh = box((0.12, 0.08, 0.04))
+    config = LabelConfig(cup=CUP_PAPER)
+    assert SuctionLabeller(mesh, config, mass=5.0).wrench_resistance([[0, 0, 0.02]], DOWN)[0]
+    off = SuctionLabeller(mesh, config, mass=1.0, com=[0.001, 0.0, 0.0])
+    assert not off.wrench_resistance([[0, 0, 0.02]], DOWN)[0]
+
+
+def test_bad_object_parameters_are_rejected(soap):
+    for kwargs in ({"mass": -1.0}, {"mass": float("nan")}, {"com": [0.0, np.nan, 0.0]}):
+        with pytest.raises(InputError):
+            SuctionLabeller(soap, **kwargs)
+    labeller = SuctionLabeller(soap)
+    with pytest.raises(InputError, match="unit vector"):
+        labeller.seal([[0, 0, 0.025]], [[0, 0, 0]])
+    with pytest.raises(InputError):
+        PerturbationConfig(num_samples=0)
+
+
+def test_grasp_sampler_is_uniform_by_area_with_inward_normals(rng):
+    # Box 10 x 6 x 2 cm: the top face holds 60 / (2 (60 + 20 + 12)) = 32.6 % of the area, so
+    # about that share of uniform samples lands on it with approach (0, 0, -1) (inward).
+    mesh = box((0.10, 0.06, 0.02))
+    points, approaches = sample_surface_grasps(mesh, 4000, rng)
+    on_top = np.isclose(points[:, 2], 0.01)
+    share = 60.0 / (2 * (60.0 + 20.0 + 12.0))
+    assert abs(on_top.mean() - share) < 4 * math.sqrt(share * (1 - share) / 4000)
+    np.testing.assert_allclose(approaches[on_top], np.tile([0.0, 0.0, -1.0], (on_top.sum(), 1)))
+    _, distance, _ = mesh.nearest.on_surface(points)
+    assert distance.max() < 1e-9

@@ -26,7 +26,33 @@ from rich.table import Table
 from suctionbench import __version__
 from suctionbench.errors import InputError
 
+
+class ContractGroup(typer.core.TyperGroup):
+    """Top-level command group that keeps the CLI contract for usage errors too.
+
+    Click reports a bad option before any command runs; here such errors still exit 2 and, under
+    --json, still end stdout with a JSON object.
+    """
+
+    def main(self, args: Any = None, *pargs: Any, standalone_mode: bool = True, **kwargs: Any) -> Any:
+        argv = list(sys.argv[1:] if args is None else args)
+        try:
+            rv = super().main(argv, *pargs, standalone_mode=False, **kwargs)
+        except typer.core._click.exceptions.ClickException as exc:
+            exc.show()
+            _emit({"ok": False, "error": exc.format_message()}, "--json" in argv)
+            rv = exc.exit_code
+        except typer.core._click.exceptions.Abort:
+            err.print("aborted")
+            rv = 1
+        code = rv if isinstance(rv, int) else 0
+        if not standalone_mode:
+            return code
+        sys.exit(code)
+
+
 app = typer.Typer(
+    cls=ContractGroup,
     add_completion=False,
     no_args_is_help=True,
     help="Robust suction grasp labels, datasets, GQ-CNN policies and a MuJoCo benchmark.",
@@ -34,7 +60,7 @@ app = typer.Typer(
 bench_app = typer.Typer(no_args_is_help=True, help="Speed figures, each timed against its reference in one run.")
 app.add_typer(bench_app, name="bench")
 
-err = Console(stderr=True)
+err = Console(stderr=True, soft_wrap=True)  # soft wrap: one error, one line
 
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object on the last stdout line.")]
 SeedOpt = Annotated[int, typer.Option("--seed", help="Seed of every random draw.")]
@@ -136,7 +162,7 @@ def label(
         config = LabelConfig(
             cup=cup_preset(cup), perturbation=replace(PerturbationConfig(), num_samples=samples)
         )
-        info = load_mesh(mesh, units=units)
+        info = load_mesh(mesh, units=units.lower())
         com_vec = parse_vector(com, 3, "--com") if com is not None else None
         labeller = SuctionLabeller(info, config, mass=mass, com=com_vec)
         warnings = list(info.warnings)

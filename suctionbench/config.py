@@ -12,7 +12,7 @@ import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, ClassVar, TypeVar
 
 from suctionbench.errors import InputError
 
@@ -22,6 +22,12 @@ T = TypeVar("T")
 @dataclass(frozen=True)
 class CupConfig:
     """A single circular suction cup, as modelled in Dex-Net 3.0 (section "Compliant Suction Contact Model")."""
+
+    DEFAULT: ClassVar[CupConfig]
+    """Preset: physically grounded (V = vacuum pressure x area, kappa from the lip staying in contact)."""
+
+    PAPER: ClassVar[CupConfig]
+    """Preset: the paper's literal V = 250 and kappa = 0.005."""
 
     name: str = "default"
     """Preset name, recorded in labels, datasets and model cards."""
@@ -90,6 +96,8 @@ CUP_DEFAULT = CupConfig()
 
 CUP_PAPER = CupConfig(name="paper", vacuum_force=250.0, kappa=0.005)
 """The paper's literal values, V = 250 N and kappa = 0.005 (units as the paper states them)."""
+
+CupConfig.DEFAULT, CupConfig.PAPER = CUP_DEFAULT, CUP_PAPER
 
 CUP_PRESETS: dict[str, CupConfig] = {"default": CUP_DEFAULT, "paper": CUP_PAPER}
 

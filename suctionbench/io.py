@@ -26,7 +26,10 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     tmp_path = Path(tmp)
     try:
         yield tmp_path
-        os.replace(tmp_path, path)
+        try:
+            os.replace(tmp_path, path)
+        except OSError as exc:
+            raise InputError(f"output '{path}': cannot write there ({exc.strerror})") from None
     finally:
         tmp_path.unlink(missing_ok=True)
 

@@ -55,6 +55,7 @@ class MeshInfo:
 def load_mesh(path: str | Path, units: str = "m") -> MeshInfo:
     """Read a mesh file, convert it to metres and validate it (see `validate_mesh`)."""
     path = Path(path)
+    units = units.lower()
     if units not in UNIT_SCALES:
         raise InputError(f"units '{units}' is unknown (known: {', '.join(UNIT_SCALES)})")
     if not path.exists():
@@ -67,11 +68,15 @@ def load_mesh(path: str | Path, units: str = "m") -> MeshInfo:
             f"(supported: {', '.join(SUPPORTED_SUFFIXES)})"
         )
     try:
-        loaded = trimesh.load(str(path), force="mesh", process=True)
+        # process=False: trimesh's processing silently drops NaN vertices; validate first.
+        loaded = trimesh.load(str(path), force="mesh", process=False)
     except Exception as exc:  # trimesh raises many exception types for malformed files
         raise InputError(f"mesh '{path}': could not be read ({type(exc).__name__}: {exc})") from None
-    if not isinstance(loaded, trimesh.Trimesh):
-        raise InputError(f"mesh '{path}': file holds no triangle mesh")
+    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
+        raise InputError(f"mesh '{path}': no triangles could be read (empty or malformed file)")
+    if not np.all(np.isfinite(loaded.vertices)):
+        raise InputError(f"mesh '{path}': vertices contain NaN or infinite coordinates")
+    loaded.process(validate=False)
     if UNIT_SCALES[units] != 1.0:
         loaded.apply_scale(UNIT_SCALES[units])
     return validate_mesh(loaded, source=str(path))

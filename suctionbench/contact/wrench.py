@@ -25,6 +25,7 @@ vectorises over any number of grasps and samples. `resists_qp` keeps the QP as t
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import qpsolvers
@@ -35,19 +36,23 @@ from suctionbench.config import CupConfig
 SQRT2, SQRT3 = math.sqrt(2.0), math.sqrt(3.0)
 
 CLOSED_FORM_SLACK = 1e-9
-"""Relative slack on each constraint of the closed form (in units of V for forces, r V for
-torques), so that wrenches exactly on the boundary of F count as resisted despite rounding."""
+"""Relative slack on each constraint of the closed form, in units of that constraint's bound at
+zero load (mu V, r mu V, pi r kappa, V), so that wrenches exactly on the boundary of F count as
+resisted despite rounding."""
 
-QP_RESIDUAL_TOL = 1e-8
-"""The QP reference declares a wrench resisted when the residual ||D (G alpha + w)||, with forces
-scaled by 1/V and torques by 1/(r V), is at most this. With `CLARABEL_SETTINGS` the residual of a
-resisted wrench comes out ~1e-12, so the two paths can only disagree for wrenches within ~1e-8
-(relative) of the boundary of F."""
+QP_RESIDUAL_TOL = 1e-9
+"""The QP reference declares a wrench resisted when the residual ||D (G alpha + w)|| is at most
+QP_RESIDUAL_TOL + QP_RELATIVE_TOL ||D w||. D expresses the residual in units of the tilt limit
+tau_s = min(pi r kappa, r V): torques divided by tau_s, forces multiplied by r / tau_s (a force as
+the torque it exerts at the cup radius). Weighting forces less would make the residual useless:
+in the object frame a tiny change of contact force at a lever |o| supplies any missing torque, so
+with forces weighted by 1/V a wrench 1e-3 outside F has a true minimum residual ~1e-9 (paper
+preset). With D, that residual is ~1e-3 r / |o|. After polishing (`_polish`) a resisted wrench
+leaves only rounding error, ~1e-16 ||D w|| per operation (||D w|| reaches ~1e6 for the paper
+preset's tiny tilt limit), hence the relative part."""
 
-CLARABEL_SETTINGS = {"tol_gap_abs": 1e-14, "tol_gap_rel": 1e-14, "tol_feas": 1e-12, "tol_ktratio": 1e-10}
-"""Clarabel's default gap tolerance (1e-8) bounds the objective, the *squared* residual, so it
-stops at residuals ~1e-6 and misclassifies wrenches just inside the boundary; these settings
-cost nothing measurable (0.2 ms per QP either way)."""
+QP_RELATIVE_TOL = 1e-12
+"""Relative part of the QP's resistance tolerance, see QP_RESIDUAL_TOL."""
 
 
 def external_wrench_at_contact(
@@ -68,15 +73,15 @@ def resists(wrench_contact: np.ndarray, mu: np.ndarray | float, cup: CupConfig) 
     a = -np.asarray(wrench_contact, dtype=float)
     mu = np.asarray(mu, dtype=float)
     v, r = cup.vacuum_force, cup.radius
-    ef, et = CLOSED_FORM_SLACK * v, CLOSED_FORM_SLACK * r * v
+    tilt = math.pi * r * cup.kappa
+    eps = CLOSED_FORM_SLACK
     f_n = a[:, 2] + v
-    ok = a[:, 2] >= -v - ef
-    ok &= SQRT3 * np.abs(a[:, 0]) <= mu * f_n + ef
-    ok &= SQRT3 * np.abs(a[:, 1]) <= mu * f_n + ef
-    ok &= SQRT3 * np.abs(a[:, 5]) <= r * mu * f_n + et
-    torque_limit = math.pi * r * cup.kappa + et
-    ok &= SQRT2 * np.abs(a[:, 3]) <= torque_limit
-    ok &= SQRT2 * np.abs(a[:, 4]) <= torque_limit
+    ok = a[:, 2] >= -v * (1.0 + eps)
+    ok &= SQRT3 * np.abs(a[:, 0]) <= mu * (f_n + eps * v)
+    ok &= SQRT3 * np.abs(a[:, 1]) <= mu * (f_n + eps * v)
+    ok &= SQRT3 * np.abs(a[:, 5]) <= r * mu * (f_n + eps * v)
+    ok &= SQRT2 * np.abs(a[:, 3]) <= tilt * (1.0 + eps)
+    ok &= SQRT2 * np.abs(a[:, 4]) <= tilt * (1.0 + eps)
     return ok
 
 
@@ -119,20 +124,71 @@ def resists_qp(
     """Reference: solve min_{alpha in F} ||D (G alpha + w)||^2 with Clarabel for one grasp.
 
     Everything in the object frame (w about the object origin); D makes the residual
-    dimensionless. Returns (resisted, residual).
+    dimensionless (see QP_RESIDUAL_TOL). Clarabel's stopping rule bounds the objective, i.e. the *squared* residual, so
+    its raw solution only resolves residuals down to ~1e-4; the solution is therefore polished on
+    its active set (exact KKT solves), which makes the residual exact. Returns (resisted, residual).
     """
     w = np.concatenate([force, np.cross(com, force)])
-    g = grasp_map(ring_centre, frame)
-    scale = np.array([1.0 / cup.vacuum_force] * 3 + [1.0 / (cup.radius * cup.vacuum_force)] * 3)
-    dg = scale[:, None] * g
-    dw = scale * w
+    torque_scale = min(math.pi * cup.radius * cup.kappa, cup.radius * cup.vacuum_force)
+    scale = np.array([cup.radius / torque_scale] * 3 + [1.0 / torque_scale] * 3)
+    m = scale[:, None] * grasp_map(ring_centre, frame)
+    c = scale * w
     a_ineq, b_ineq = constraint_matrix(mu, cup)
-    p = sp.csc_matrix(2.0 * dg.T @ dg)
-    q = 2.0 * dg.T @ dw
-    alpha = qpsolvers.solve_qp(
-        p, q, sp.csc_matrix(a_ineq), b_ineq, solver="clarabel", **CLARABEL_SETTINGS
-    )
-    if alpha is None:  # solver failure: report as not resisted, with an infinite residual
-        return False, math.inf
-    residual = float(np.linalg.norm(dg @ alpha + dw))
-    return residual <= QP_RESIDUAL_TOL, residual
+    with warnings.catch_warnings():  # non-"Solved" statuses are expected here; the polish fixes them
+        warnings.simplefilter("ignore", UserWarning)
+        alpha = qpsolvers.solve_qp(
+            sp.csc_matrix(2.0 * m.T @ m), 2.0 * m.T @ c, sp.csc_matrix(a_ineq), b_ineq, solver="clarabel"
+        )
+    if alpha is None:  # no solution reported: start the active-set polish from alpha = 0
+        alpha = np.zeros(6)
+    alpha = _polish(m, c, a_ineq, b_ineq, alpha)
+    residual = float(np.linalg.norm(m @ alpha + c))
+    return residual <= QP_RESIDUAL_TOL + QP_RELATIVE_TOL * float(np.linalg.norm(c)), residual
+
+
+def _polish(m: np.ndarray, c: np.ndarray, a: np.ndarray, b: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    """Exact minimiser of ||m alpha + c||^2 s.t. a alpha <= b, from an approximate one.
+
+    A primal-dual active-set iteration warm-started with the constraints that are (nearly) tight
+    at `alpha`: minimise the residual on the active set's affine subspace (null-space method on m
+    itself, never the squared-conditioned m^T m), drop the constraint with the most negative
+    multiplier, else add the most violated one, until the KKT conditions hold. Six variables and
+    eleven constraints: a few steps; an active set seen before ends the search with the best
+    feasible point found.
+    """
+    norms = np.linalg.norm(a, axis=1)
+    a, b = a / norms[:, None], b / norms  # unit rows: violations and multipliers comparable
+    active = sorted(np.flatnonzero(b - a @ alpha <= 1e-6 * np.maximum(np.abs(b), 1e-12)).tolist())
+    seen: set[tuple[int, ...]] = set()
+    best, best_residual = None, np.inf
+    while tuple(active) not in seen:
+        seen.add(tuple(active))
+        x = _least_squares_on(m, c, a[active], b[active])
+        residual_vec = m @ x + c
+        violation = a @ x - b
+        feasible = violation.max() <= 1e-12 * max(1.0, np.abs(b).max())
+        if feasible and np.linalg.norm(residual_vec) < best_residual:
+            best, best_residual = x, float(np.linalg.norm(residual_vec))
+        if active:
+            lam = np.linalg.lstsq(a[active].T, -(m.T @ residual_vec), rcond=None)[0]
+            if lam.min() < -1e-10 * max(1.0, float(np.linalg.norm(m.T @ residual_vec))):
+                active.pop(int(np.argmin(lam)))
+                continue
+        if feasible:
+            return x
+        active = sorted(active + [int(np.argmax(violation))])
+    return alpha if best is None else best
+
+
+def _least_squares_on(m: np.ndarray, c: np.ndarray, a_eq: np.ndarray, b_eq: np.ndarray) -> np.ndarray:
+    """argmin ||m x + c|| subject to a_eq x = b_eq (least-squares consistent), by null space."""
+    if len(a_eq) == 0:
+        return np.linalg.lstsq(m, -c, rcond=None)[0]
+    x0 = np.linalg.lstsq(a_eq, b_eq, rcond=None)[0]
+    _, sing, vt = np.linalg.svd(a_eq)
+    rank = int((sing > 1e-12 * sing[0]).sum())
+    null = vt[rank:].T
+    if null.shape[1] == 0:
+        return x0
+    y = np.linalg.lstsq(m @ null, -(m @ x0 + c), rcond=None)[0]
+    return x0 + null @ y

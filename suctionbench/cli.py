@@ -241,7 +241,7 @@ def _print_batch(labels: Any, summary: dict[str, Any], top: int, mesh: str) -> N
         best.add_row(
             str(i),
             f"{p[0]:.1f},{p[1]:.1f},{p[2]:.1f}",
-            f"{v[0] + 0.0:.2f},{v[1] + 0.0:.2f},{v[2] + 0.0:.2f}",
+            ",".join(f"{round(c, 2) + 0.0:.2f}" for c in v),
             "yes" if labels.seal.seal[i] else (labels.seal.failure_names[i] or ""),
             f"{labels.seal.max_stretch[i]:.3f}",
             "yes" if labels.wr[i] else "no",

@@ -8,6 +8,7 @@ problem), 1 on an internal failure. Long work shows a progress bar on a terminal
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 import traceback
@@ -59,6 +60,8 @@ app = typer.Typer(
 )
 bench_app = typer.Typer(no_args_is_help=True, help="Speed figures, each timed against its reference in one run.")
 app.add_typer(bench_app, name="bench")
+objects_app = typer.Typer(no_args_is_help=True, help="Object sets: list, show, build, import, generate the corpus.")
+app.add_typer(objects_app, name="objects")
 
 err = Console(stderr=True, soft_wrap=True)  # soft wrap: one error, one line
 
@@ -279,6 +282,156 @@ def bench_label(
                 table.add_row(key, f"{value:.4g}" if isinstance(value, float) else str(value))
             Console().print(table)
         return result
+
+    _run(as_json, body)
+
+
+def _record_row(record: Any) -> dict[str, Any]:
+    return {
+        "key": record.key,
+        "generator": record.generator,
+        "faces": record.faces,
+        "parts": len(record.parts),
+        "mass": record.mass,
+        "extents": record.extents,
+        "stable_poses": len(record.stable_poses),
+    }
+
+
+def _print_rows(title: str, rows: list[dict[str, Any]]) -> None:
+    if not rows:
+        err.print(f"{title}: none")
+        return
+    table = Table(title=title)
+    for col in rows[0]:
+        table.add_column(col)
+    for row in rows:
+        table.add_row(*[
+            f"{v:.4g}" if isinstance(v, float) else ",".join(f"{x:.3g}" for x in v) if isinstance(v, list) else str(v)
+            for v in row.values()
+        ])
+    Console().print(table)
+
+
+@objects_app.command("list")
+def objects_list(
+    set_name: Annotated[str | None, typer.Option("--set", help="Only this set.")] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """List built objects (evaluation sets and user sets)."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.objects.registry import list_objects
+
+        rows = [_record_row(r) for r in list_objects(set_name)]
+        if not as_json:
+            _print_rows(f"objects{' in ' + set_name if set_name else ''}", rows)
+        return {"count": len(rows), "objects": rows}
+
+    _run(as_json, body)
+
+
+@objects_app.command("show")
+def objects_show(
+    key: Annotated[str, typer.Argument(help="SET/NAME, e.g. basic/box_cereal.")],
+    as_json: JsonOpt = False,
+) -> None:
+    """Show one object's record (object.toml)."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.objects.registry import load_object
+
+        record = load_object(key)
+        data = record.to_toml()
+        if not as_json:
+            table = Table(title=key, show_header=False)
+            for k, v in data.items():
+                if k == "stable_poses":
+                    v = ", ".join(f"{p['probability']:.3f}" for p in v)
+                table.add_row(k, str(v))
+            Console().print(table)
+        return {"key": key, "directory": str(record.directory), **data}
+
+    _run(as_json, body)
+
+
+@objects_app.command("build")
+def objects_build(
+    set_name: Annotated[str | None, typer.Option("--set", help="Only this evaluation set.")] = None,
+    out: Annotated[Path | None, typer.Option(help="Root to build into (default: the shipped assets).")] = None,
+    workers: Annotated[int, typer.Option(help="Parallel processes.")] = 2,
+    as_json: JsonOpt = False,
+) -> None:
+    """Regenerate evaluation-set objects (meshes, stable poses, convex parts) deterministically."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.objects.batch import build_specs
+        from suctionbench.objects.registry import assets_root, eval_specs
+
+        sets = eval_specs()
+        if set_name is not None and set_name not in sets:
+            raise InputError(f"object set '{set_name}' is unknown (known: {', '.join(sets)})")
+        specs = [s for name, group in sets.items() if set_name in (None, name) for s in group]
+        start = time.perf_counter()
+        with _progress(len(specs), "building", not as_json) as advance:
+            records = build_specs(specs, out or assets_root(), workers=workers, progress=advance)
+        rows = [_record_row(r) for r in records]
+        if not as_json:
+            _print_rows("built", rows)
+        return {"built": len(records), "seconds": round(time.perf_counter() - start, 1), "objects": rows}
+
+    _run(as_json, body)
+
+
+@objects_app.command("import")
+def objects_import(
+    path: Annotated[str, typer.Argument(help="Mesh file: OBJ, STL, PLY, OFF, GLB.")],
+    set_name: Annotated[str, typer.Option("--set", help="User set to add it to.")] = "custom",
+    name: Annotated[str, typer.Option(help="Object name (lower case, digits, _ and -).")] = "",
+    units: Annotated[str, typer.Option(help="Units of the file: m, cm or mm.")] = "m",
+    mass: Annotated[float | None, typer.Option(help="Mass in kg (default: from density, capped).")] = None,
+    repair: Annotated[bool, typer.Option(help="Try to close small holes.")] = True,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing object of that name.")] = False,
+    root: Annotated[Path | None, typer.Option(help="Object root (default: $SUCTIONBENCH_HOME/objects).")] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Import your own mesh: validate, repair small holes, decompose, compute stable poses."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.objects.importer import import_mesh
+
+        record = import_mesh(
+            path, set_name=set_name, name=name or Path(path).stem.lower(), units=units, mass=mass,
+            try_repair=repair, overwrite=overwrite, root=root,
+        )
+        row = _record_row(record)
+        if not as_json:
+            _print_rows("imported", [row])
+        return {**row, "directory": str(record.directory)}
+
+    _run(as_json, body)
+
+
+@objects_app.command("generate")
+def objects_generate(
+    count: Annotated[int, typer.Option(help="Number of training objects.")] = 1500,
+    out: Annotated[Path, typer.Option(help="Corpus directory (objects are cached there).")] = Path("corpus"),
+    workers: Annotated[int, typer.Option(help="Parallel processes (0 = all cores).")] = 0,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Generate (or complete) the training corpus; evaluation objects never appear in it."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.objects.corpus_build import generate_corpus
+
+        if count < 1:
+            raise InputError(f"--count {count}: must be at least 1")
+        with _progress(count, "generating", not as_json) as advance:
+            summary = generate_corpus(count, seed, out, workers=workers or os.cpu_count() or 1, progress=advance)
+        if not as_json:
+            _print_rows("corpus", [{k: v for k, v in summary.items() if not isinstance(v, dict)}])
+        return summary
 
     _run(as_json, body)
 

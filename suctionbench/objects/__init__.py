@@ -1,0 +1,2 @@
+"""Object sets: procedural generators, the Basic / Typical / Adversarial sets, the training corpus,
+mesh import, stable poses, convex decomposition and MuJoCo bodies."""

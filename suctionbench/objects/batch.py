@@ -1,0 +1,43 @@
+"""Build many objects from specs in parallel (process pool), each written atomically."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+from suctionbench.objects.build import ObjectRecord, build_object
+from suctionbench.objects.spec import ObjectSpec
+
+
+def _build_one(args: tuple[ObjectSpec, Path, bool]) -> ObjectRecord:
+    from suctionbench.objects import adversarial, household  # noqa: F401  (register generators)
+    from suctionbench.objects.shapes import make_shape
+
+    spec, out_dir, decompose = args
+    return build_object(make_shape(spec.generator, spec.params), spec, out_dir, decompose=decompose)
+
+
+def build_specs(
+    specs: list[ObjectSpec],
+    root: Path,
+    *,
+    workers: int = 1,
+    decompose: bool = True,
+    progress: Callable[[int], None] | None = None,
+) -> list[ObjectRecord]:
+    """Build every spec into root/<set>/<name>/ and return the records in spec order."""
+    jobs = [(spec, Path(root) / spec.set / spec.name, decompose) for spec in specs]
+    records: list[ObjectRecord] = []
+    if workers <= 1:
+        for job in jobs:
+            records.append(_build_one(job))
+            if progress:
+                progress(1)
+        return records
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        for record in pool.map(_build_one, jobs, chunksize=1):
+            records.append(record)
+            if progress:
+                progress(1)
+    return records

@@ -1,0 +1,258 @@
+"""Turn a mesh into an object directory: validated mesh, mass properties, stable poses and a
+convex decomposition for simulation, described by object.toml. Written atomically.
+
+Layout of an object directory:
+    object.toml         everything below, human readable
+    mesh.stl            the (decimated) surface mesh used for labels, rendering and visuals
+    parts/part_NNN.stl  convex parts (CoACD): one MuJoCo collision geom each
+"""
+
+from __future__ import annotations
+
+import hashlib
+import shutil
+import tempfile
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import coacd
+import numpy as np
+import tomli_w
+import trimesh
+
+from suctionbench.config import CUP_DEFAULT
+from suctionbench.errors import InputError
+from suctionbench.geometry.mesh import MeshInfo, validate_mesh
+from suctionbench.objects.spec import ObjectSpec
+
+MAX_FACES = 6000
+"""Surface meshes above this many faces are decimated (quadric decimation) before anything else."""
+
+MASS_CAP = 0.8 * CUP_DEFAULT.payload_kg
+"""Masses from density are capped at 80 % of the default cup's payload (0.72 kg): the benchmark
+is about where to grasp, and an object no cup position can lift tests nothing."""
+
+MIN_MASS = 0.005
+"""Lightest object mass (kg), so that no simulated object is a feather."""
+
+COACD_THRESHOLD = 0.05
+"""CoACD concavity threshold (smaller: more, tighter parts)."""
+
+COACD_MAX_HULLS = 24
+"""At most this many convex parts per object (MuJoCo geoms)."""
+
+MAX_STABLE_POSES = 10
+"""Stable poses kept per object (most probable first)."""
+
+MIN_POSE_PROBABILITY = 0.005
+"""Stable poses less probable than this are dropped."""
+
+COVERAGE_MIN = 0.95
+"""The union of the convex parts must cover at least this fraction of the object's volume."""
+
+EXCESS_MAX = 1.25
+"""...and its volume may exceed the object's by at most this factor (hulls bridge concavities)."""
+
+
+@dataclass
+class ObjectRecord:
+    """One built object: the contents of object.toml plus where it lives."""
+
+    name: str
+    set: str
+    generator: str
+    params: dict[str, Any]
+    description: str
+    source: str
+    units: str
+    scale: float
+    density: float
+    mass: float
+    com: list[float]
+    inertia: list[list[float]]
+    friction: float
+    volume: float
+    watertight: bool
+    faces: int
+    extents: list[float]
+    geometry_hash: str
+    stable_poses: list[dict[str, Any]]
+    parts: list[str]
+    decomposition: dict[str, Any] = field(default_factory=dict)
+    directory: Path | None = None
+
+    @property
+    def key(self) -> str:
+        """SET/NAME."""
+        return f"{self.set}/{self.name}"
+
+    def mesh(self) -> trimesh.Trimesh:
+        """The object's surface mesh (metres, object frame)."""
+        return trimesh.load(self.directory / "mesh.stl", force="mesh")
+
+    def part_meshes(self) -> list[trimesh.Trimesh]:
+        """The convex collision parts."""
+        return [trimesh.load(self.directory / p, force="mesh") for p in self.parts]
+
+    def most_probable_pose(self) -> np.ndarray:
+        """4x4 transform placing the object at rest on the plane z = 0."""
+        return np.asarray(self.stable_poses[0]["transform"], dtype=float)
+
+    def to_toml(self) -> dict[str, Any]:
+        data = {k: v for k, v in self.__dict__.items() if k != "directory"}
+        return data
+
+    @classmethod
+    def load(cls, directory: Path) -> ObjectRecord:
+        path = Path(directory) / "object.toml"
+        try:
+            data = tomllib.loads(path.read_text())
+        except FileNotFoundError:
+            raise InputError(f"object '{directory}': no object.toml") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise InputError(f"object '{path}': malformed TOML ({exc})") from None
+        return cls(**data, directory=Path(directory))
+
+
+def geometry_hash(mesh: trimesh.Trimesh) -> str:
+    """Content hash of a mesh's geometry (vertices rounded to 1 micrometre, faces)."""
+    digest = hashlib.sha256()
+    digest.update(np.round(np.asarray(mesh.vertices), 6).astype(np.float64).tobytes())
+    digest.update(np.asarray(mesh.faces, dtype=np.int64).tobytes())
+    return digest.hexdigest()[:32]
+
+
+def prepare_mesh(mesh: trimesh.Trimesh, source: str) -> MeshInfo:
+    """Validate, decimate if large, and insist on one closed body (what simulation needs)."""
+    info = validate_mesh(mesh, source=source)
+    mesh = info.mesh
+    if not info.watertight:
+        raise InputError(f"mesh '{source}': not watertight (has holes or inconsistent faces)")
+    bodies = mesh.split(only_watertight=False)
+    if len(bodies) > 1:
+        raise InputError(f"mesh '{source}': {len(bodies)} disconnected bodies, expected one")
+    if len(mesh.faces) > MAX_FACES:
+        reduced = mesh.simplify_quadric_decimation(face_count=MAX_FACES)
+        if reduced.is_watertight and reduced.is_winding_consistent and reduced.volume > 0:
+            mesh = reduced
+    return MeshInfo(mesh=mesh, source=source, watertight=True, warnings=info.warnings)
+
+
+def stable_poses(mesh: trimesh.Trimesh, com: np.ndarray) -> list[dict[str, Any]]:
+    """Quasi-static stable resting poses (Goldberg et al.) with probabilities, most probable first."""
+    transforms, probs = trimesh.poses.compute_stable_poses(mesh, center_mass=com, sigma=0.0, n_samples=1)
+    order = np.argsort(-probs)
+    kept = [i for i in order if probs[i] >= MIN_POSE_PROBABILITY][:MAX_STABLE_POSES]
+    return [
+        {"probability": round(float(probs[i]), 6), "transform": np.round(transforms[i], 9).tolist()}
+        for i in kept
+    ]
+
+
+def convex_parts(mesh: trimesh.Trimesh, seed: int = 0) -> list[trimesh.Trimesh]:
+    """Convex decomposition with CoACD (MuJoCo collides meshes by their convex hulls)."""
+    coacd.set_log_level("error")
+    raw = coacd.run_coacd(
+        coacd.Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces)),
+        threshold=COACD_THRESHOLD,
+        max_convex_hull=COACD_MAX_HULLS,
+        seed=seed,
+    )
+    parts = [trimesh.Trimesh(v, f, process=True).convex_hull for v, f in raw]
+    return sorted(parts, key=lambda p: tuple(np.round(p.centroid, 6)))
+
+
+def decomposition_quality(mesh: trimesh.Trimesh, parts: list[trimesh.Trimesh]) -> dict[str, float]:
+    """Coverage (share of the mesh inside the parts' union) and excess (union volume / mesh volume)."""
+    hull_union = trimesh.boolean.union(parts, engine="manifold") if len(parts) > 1 else parts[0]
+    outside = trimesh.boolean.difference([mesh, hull_union], engine="manifold")
+    outside_volume = float(outside.volume) if len(outside.faces) else 0.0
+    return {
+        "coverage": round(1.0 - max(outside_volume, 0.0) / float(mesh.volume), 6),
+        "excess": round(float(hull_union.volume) / float(mesh.volume), 6),
+    }
+
+
+def build_object(
+    mesh: trimesh.Trimesh,
+    spec: ObjectSpec,
+    out_dir: Path,
+    *,
+    source: str = "generated",
+    units: str = "m",
+    scale: float = 1.0,
+    mass: float | None = None,
+    decompose: bool = True,
+) -> ObjectRecord:
+    """Build an object directory at `out_dir` (replaced atomically) and return its record."""
+    info = prepare_mesh(mesh, source=source if source != "generated" else spec.name)
+    mesh = info.mesh
+    com = np.asarray(mesh.center_mass, dtype=float)
+    if mass is None:
+        mass = float(np.clip(spec.density * mesh.volume, MIN_MASS, MASS_CAP))
+    elif not (np.isfinite(mass) and mass > 0):
+        raise InputError(f"mass {mass!r}: must be a positive number of kilograms")
+    mesh.density = mass / mesh.volume
+    inertia = np.asarray(mesh.moment_inertia, dtype=float)
+    record = ObjectRecord(
+        name=spec.name,
+        set=spec.set,
+        generator=spec.generator,
+        params=spec.params,
+        description=spec.description,
+        source=source,
+        units=units,
+        scale=float(scale),
+        density=round(mass / mesh.volume, 6),
+        mass=round(mass, 9),
+        com=np.round(com, 9).tolist(),
+        inertia=np.round(inertia, 12).tolist(),
+        friction=spec.friction,
+        volume=round(float(mesh.volume), 12),
+        watertight=True,
+        faces=len(mesh.faces),
+        extents=np.round(mesh.extents, 9).tolist(),
+        geometry_hash=geometry_hash(mesh),
+        stable_poses=stable_poses(mesh, com),
+        parts=[],
+    )
+    out_dir = Path(out_dir)
+    try:
+        out_dir.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))
+    except OSError as exc:
+        raise InputError(f"output '{out_dir}': cannot write there ({exc.strerror})") from None
+    try:
+        mesh.export(tmp / "mesh.stl")
+        if decompose:
+            parts = convex_parts(mesh)
+            (tmp / "parts").mkdir()
+            for i, part in enumerate(parts):
+                part.export(tmp / "parts" / f"part_{i:03d}.stl")
+            record.parts = [f"parts/part_{i:03d}.stl" for i in range(len(parts))]
+            record.decomposition = {
+                "method": "coacd",
+                "threshold": COACD_THRESHOLD,
+                "max_convex_hull": COACD_MAX_HULLS,
+                **decomposition_quality(mesh, parts),
+            }
+        (tmp / "object.toml").write_text(tomli_w.dumps(record.to_toml()))
+        _replace_dir(tmp, out_dir)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    record.directory = out_dir
+    return record
+
+
+def _replace_dir(new: Path, target: Path) -> None:
+    """Move directory `new` to `target`, replacing any old one (old removed only after the move)."""
+    old = None
+    if target.exists():
+        old = target.with_name(f".{target.name}.old")
+        shutil.rmtree(old, ignore_errors=True)
+        target.rename(old)
+    new.rename(target)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)

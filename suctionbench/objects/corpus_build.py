@@ -1,0 +1,89 @@
+"""Generate and cache the training corpus: specs from corpus.py, built without convex parts
+(training needs meshes, labels and renders, not simulation), checked disjoint from the
+evaluation sets by geometry hash and by (generator, parameters)."""
+
+from __future__ import annotations
+
+import json
+import time
+from collections import Counter
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from suctionbench.errors import InputError
+from suctionbench.io import atomic_path
+from suctionbench.objects.batch import build_specs
+from suctionbench.objects.build import ObjectRecord
+from suctionbench.objects.registry import eval_specs, list_objects
+from suctionbench.objects.spec import SETS
+
+
+def _cached(directory: Path, spec: Any) -> ObjectRecord | None:
+    """The built object at `directory` if it exists and was built from exactly `spec`."""
+    try:
+        record = ObjectRecord.load(directory)
+    except (InputError, TypeError):
+        return None
+    return record if (record.generator, record.params) == (spec.generator, spec.params) else None
+
+
+def evaluation_fingerprints() -> tuple[set[str], set[str]]:
+    """Geometry hashes of the committed evaluation objects and their (generator, params) keys."""
+    hashes = {r.geometry_hash for s in SETS for r in list_objects(s)}
+    keys = {_spec_key(spec) for group in eval_specs().values() for spec in group}
+    return hashes, keys
+
+
+def _spec_key(spec: Any) -> str:
+    return json.dumps([spec.generator, spec.params], sort_keys=True)
+
+
+def generate_corpus(
+    count: int, seed: int, out: Path, *, workers: int = 1, progress: Callable[[int], None] | None = None
+) -> dict[str, Any]:
+    """Build `count` corpus objects into out/train/ (reusing cached ones); write out/corpus.json."""
+    from suctionbench.objects.corpus import corpus_specs
+
+    start = time.perf_counter()
+    specs = corpus_specs(count, seed)
+    eval_hashes, eval_keys = evaluation_fingerprints()
+    clashing = [s.name for s in specs if _spec_key(s) in eval_keys]
+    if clashing:
+        raise RuntimeError(f"corpus specs equal to evaluation objects: {clashing[:5]}")
+    root = Path(out)
+    records: dict[str, ObjectRecord] = {}
+    todo = []
+    for spec in specs:
+        cached = _cached(root / spec.set / spec.name, spec)
+        if cached is None:
+            todo.append(spec)
+        else:
+            records[spec.name] = cached
+            if progress:
+                progress(1)
+    for record in build_specs(todo, root, workers=workers, decompose=False, progress=progress):
+        records[record.name] = record
+    ordered = [records[s.name] for s in specs]
+    overlap = [r.name for r in ordered if r.geometry_hash in eval_hashes]
+    if overlap:
+        raise RuntimeError(f"corpus objects identical to evaluation objects: {overlap[:5]}")
+    categories = Counter(name.split("_", 2)[2] for name in records)
+    manifest = {
+        "count": count,
+        "seed": seed,
+        "categories": dict(sorted(categories.items())),
+        "objects": [{"name": r.name, "generator": r.generator, "geometry_hash": r.geometry_hash} for r in ordered],
+    }
+    with atomic_path(root / "corpus.json") as tmp:
+        tmp.write_text(json.dumps(manifest, indent=1))
+    return {
+        "count": count,
+        "seed": seed,
+        "built": len(todo),
+        "cached": count - len(todo),
+        "seconds": round(time.perf_counter() - start, 1),
+        "eval_overlap": len(overlap),
+        "categories": manifest["categories"],
+        "manifest": str(root / "corpus.json"),
+    }

@@ -94,8 +94,12 @@ def validate_mesh(mesh: trimesh.Trimesh, source: str = "mesh") -> MeshInfo:
     if not np.all(np.isfinite(vertices)):
         raise InputError(f"mesh '{source}': vertices contain NaN or infinite coordinates")
     mesh = mesh.copy()
-    mesh.update_faces(mesh.nondegenerate_faces())
-    mesh.remove_unreferenced_vertices()
+    mesh.merge_vertices()
+    cleaned = mesh.copy()
+    cleaned.update_faces(cleaned.nondegenerate_faces())
+    cleaned.remove_unreferenced_vertices()
+    if cleaned.is_watertight or not mesh.is_watertight:  # never open a closed mesh to drop slivers
+        mesh = cleaned
     if len(mesh.faces) == 0 or mesh.area <= 0.0:
         raise InputError(f"mesh '{source}': degenerate (all faces have zero area)")
     extents = mesh.extents

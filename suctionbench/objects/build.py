@@ -37,11 +37,10 @@ is about where to grasp, and an object no cup position can lift tests nothing.""
 MIN_MASS = 0.005
 """Lightest object mass (kg), so that no simulated object is a feather."""
 
-COACD_THRESHOLD = 0.05
-"""CoACD concavity threshold (smaller: more, tighter parts)."""
-
-COACD_MAX_HULLS = 24
-"""At most this many convex parts per object (MuJoCo geoms)."""
+COACD_SCHEDULE = ((0.05, 24), (0.03, 48), (0.02, 64))
+"""(concavity threshold, max parts) tried in turn until the parts' union exceeds the object's
+volume by at most EXCESS_MAX: hulls that bridge a bowl's or a tray's hollow would put phantom
+material exactly where a suction cup may want to grasp."""
 
 MAX_STABLE_POSES = 10
 """Stable poses kept per object (most probable first)."""
@@ -151,24 +150,35 @@ def stable_poses(mesh: trimesh.Trimesh, com: np.ndarray) -> list[dict[str, Any]]
     ]
 
 
-def convex_parts(mesh: trimesh.Trimesh, seed: int = 0) -> list[trimesh.Trimesh]:
+def convex_parts(mesh: trimesh.Trimesh, threshold: float, max_hulls: int, seed: int = 0) -> list[trimesh.Trimesh]:
     """Convex decomposition with CoACD (MuJoCo collides meshes by their convex hulls)."""
     coacd.set_log_level("error")
     raw = coacd.run_coacd(
         coacd.Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces)),
-        threshold=COACD_THRESHOLD,
-        max_convex_hull=COACD_MAX_HULLS,
+        threshold=threshold,
+        max_convex_hull=max_hulls,
         seed=seed,
     )
     parts = [trimesh.Trimesh(v, f, process=True).convex_hull for v, f in raw]
     return sorted(parts, key=lambda p: tuple(np.round(p.centroid, 6)))
 
 
+def decompose_mesh(mesh: trimesh.Trimesh) -> tuple[list[trimesh.Trimesh], dict[str, Any]]:
+    """Convex parts following COACD_SCHEDULE, and how well they fit (the last try if none fits)."""
+    for threshold, max_hulls in COACD_SCHEDULE:
+        parts = convex_parts(mesh, threshold, max_hulls)
+        quality = decomposition_quality(mesh, parts)
+        if quality["excess"] <= EXCESS_MAX and quality["coverage"] >= COVERAGE_MIN:
+            break
+    return parts, {"method": "coacd", "threshold": threshold, "max_convex_hull": max_hulls, **quality}
+
+
 def decomposition_quality(mesh: trimesh.Trimesh, parts: list[trimesh.Trimesh]) -> dict[str, float]:
     """Coverage (share of the mesh inside the parts' union) and excess (union volume / mesh volume)."""
     hull_union = trimesh.boolean.union(parts, engine="manifold") if len(parts) > 1 else parts[0]
     outside = trimesh.boolean.difference([mesh, hull_union], engine="manifold")
-    outside_volume = float(outside.volume) if len(outside.faces) else 0.0
+    with np.errstate(invalid="ignore", divide="ignore"):  # an empty difference has zero volume
+        outside_volume = float(outside.volume) if len(outside.faces) else 0.0
     return {
         "coverage": round(1.0 - max(outside_volume, 0.0) / float(mesh.volume), 6),
         "excess": round(float(hull_union.volume) / float(mesh.volume), 6),
@@ -227,17 +237,11 @@ def build_object(
     try:
         mesh.export(tmp / "mesh.stl")
         if decompose:
-            parts = convex_parts(mesh)
+            parts, record.decomposition = decompose_mesh(mesh)
             (tmp / "parts").mkdir()
             for i, part in enumerate(parts):
                 part.export(tmp / "parts" / f"part_{i:03d}.stl")
             record.parts = [f"parts/part_{i:03d}.stl" for i in range(len(parts))]
-            record.decomposition = {
-                "method": "coacd",
-                "threshold": COACD_THRESHOLD,
-                "max_convex_hull": COACD_MAX_HULLS,
-                **decomposition_quality(mesh, parts),
-            }
         (tmp / "object.toml").write_text(tomli_w.dumps(record.to_toml()))
         _replace_dir(tmp, out_dir)
     finally:

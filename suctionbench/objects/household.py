@@ -604,7 +604,7 @@ TYPICAL_SPECS: list[ObjectSpec] = [
     ),
     _typical(
         "pencil_tray", "household_tray", "Long desk-organiser tray with straight walls.",
-        length=0.22, width=0.07, height=0.04, wall=0.004, floor=0.004, exponent=0.2,
+        length=0.22, width=0.07, height=0.03, wall=0.007, floor=0.005, exponent=0.2,
     ),
     _typical("tape_packing", "household_tape_roll", "Roll of 48 mm packing tape lying flat."),
     _typical(

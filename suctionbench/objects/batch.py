@@ -11,7 +11,6 @@ from suctionbench.objects.spec import ObjectSpec
 
 
 def _build_one(args: tuple[ObjectSpec, Path, bool]) -> ObjectRecord:
-    from suctionbench.objects import adversarial, household  # noqa: F401  (register generators)
     from suctionbench.objects.shapes import make_shape
 
     spec, out_dir, decompose = args

@@ -33,8 +33,16 @@ def generator(name: str) -> Callable[[Generator], Generator]:
     return register
 
 
+def register_all() -> None:
+    """Import every module that registers generators, so the registry is complete wherever it
+    is used (worker processes, the corpus sampler) whatever was imported before."""
+    from suctionbench.objects import adversarial, corpus, household  # noqa: F401
+
+
 def make_shape(generator_name: str, params: dict[str, Any]) -> trimesh.Trimesh:
     """Build a shape from its generator name and parameters."""
+    if generator_name not in GENERATORS:
+        register_all()
     return GENERATORS[generator_name](**params)
 
 

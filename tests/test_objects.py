@@ -1,0 +1,183 @@
+"""Object sets: committed assets are complete, valid, reproducible and simulate; import and corpus."""
+
+from __future__ import annotations
+
+import filecmp
+import json
+
+import numpy as np
+import pytest
+import trimesh
+from typer.testing import CliRunner
+
+from suctionbench.cli import app
+from suctionbench.errors import InputError
+from suctionbench.objects.build import COVERAGE_MIN, EXCESS_MAX, MASS_CAP, MAX_FACES, MIN_MASS, ObjectRecord
+from suctionbench.objects.importer import import_mesh
+from suctionbench.objects.registry import eval_specs, list_objects, load_object
+from suctionbench.objects.spec import SETS
+
+SIZES = {"basic": 25, "typical": 25, "adversarial": 5}
+ALL = [r for s in SETS for r in list_objects(s)]
+
+
+def test_set_sizes_and_names_are_stable():
+    specs = eval_specs()
+    for set_name, size in SIZES.items():
+        names = [s.name for s in specs[set_name]]
+        assert len(names) == size and len(set(names)) == size, set_name
+        assert [r.name for r in list_objects(set_name)] == sorted(names), "committed assets differ from specs"
+
+
+@pytest.mark.parametrize("record", ALL, ids=[r.key for r in ALL])
+def test_committed_object_is_valid(record: ObjectRecord):
+    mesh = record.mesh()
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    assert mesh.volume > 0 and len(mesh.faces) <= MAX_FACES
+    assert len(mesh.split(only_watertight=False)) == 1
+    assert MIN_MASS <= record.mass <= MASS_CAP + 1e-9
+    assert record.mass == pytest.approx(record.density * mesh.volume, rel=1e-4)
+    probs = [p["probability"] for p in record.stable_poses]
+    assert probs and all(0 < p <= 1 for p in probs) and sum(probs) <= 1 + 1e-5  # each rounded to 6 decimals
+    assert probs == sorted(probs, reverse=True)
+    # the most probable pose rests the mesh on z = 0
+    rested = mesh.copy()
+    rested.apply_transform(record.most_probable_pose())
+    assert rested.bounds[0, 2] == pytest.approx(0.0, abs=1e-6)
+    assert record.parts and record.decomposition["coverage"] >= COVERAGE_MIN
+    assert record.decomposition["excess"] <= EXCESS_MAX
+    for part in record.part_meshes():
+        assert part.is_convex
+
+
+def rebuild_matches(record: ObjectRecord, tmp_path) -> None:
+    from suctionbench.objects.batch import build_specs
+
+    spec = next(s for s in eval_specs()[record.set] if s.name == record.name)
+    (rebuilt,) = build_specs([spec], tmp_path)
+    assert rebuilt.to_toml() == record.to_toml()
+    for rel in ["mesh.stl", *record.parts]:
+        assert filecmp.cmp(rebuilt.directory / rel, record.directory / rel, shallow=False), rel
+
+
+@pytest.mark.parametrize("key", ["basic/box_tea", "basic/tube_ring"])
+def test_rebuild_reproduces_committed_assets(key, tmp_path):
+    rebuild_matches(load_object(key), tmp_path)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("record", ALL, ids=[r.key for r in ALL])
+def test_rebuild_reproduces_every_committed_object(record, tmp_path):
+    rebuild_matches(record, tmp_path)
+
+
+@pytest.mark.parametrize("record", ALL, ids=[r.key for r in ALL])
+def test_object_compiles_and_rests_in_mujoco(record):
+    # In its most probable stable pose the object is in quasi-static equilibrium on the plane, so
+    # 2 s of simulation must leave it (after the 0.5 mm settling drop) where it was.
+    from suctionbench.objects.mjcf import rest_on_plane
+
+    rest = rest_on_plane(record, seconds=2.0)
+    assert rest["finite"]
+    assert rest["displacement"] < 0.003, rest
+    assert rest["rotation"] < np.radians(3.0), rest
+
+
+def test_unknown_object_and_set_are_input_errors():
+    with pytest.raises(InputError, match="unknown"):
+        load_object("basic/no_such_thing")
+    with pytest.raises(InputError, match="SET/NAME"):
+        load_object("box_tea")
+    with pytest.raises(InputError, match="unknown"):
+        list_objects("nope")
+
+
+# -- import ---------------------------------------------------------------------------------------
+
+
+def write(mesh: trimesh.Trimesh, path):
+    mesh.export(path)
+    return path
+
+
+def test_import_good_mesh_in_millimetres(tmp_path):
+    path = write(trimesh.creation.box(extents=(60.0, 40.0, 20.0)), tmp_path / "part.stl")
+    record = import_mesh(path, set_name="custom", name="part", units="mm", mass=0.1, root=tmp_path / "objs")
+    assert record.extents == pytest.approx([0.06, 0.04, 0.02])
+    assert record.mass == pytest.approx(0.1) and record.parts and record.stable_poses
+    assert (tmp_path / "objs" / "custom" / "part" / "object.toml").is_file()
+    # an open box (one face missing) is repaired: small holes get closed
+    open_box = trimesh.creation.box(extents=(0.05, 0.05, 0.05))
+    open_box.update_faces(np.arange(len(open_box.faces)) >= 2)
+    path = write(open_box, tmp_path / "open.obj")
+    assert import_mesh(path, set_name="custom", name="open", root=tmp_path / "objs").watertight
+
+
+def _bad_meshes(tmp_path):
+    two = trimesh.util.concatenate([trimesh.creation.box(extents=(0.03,) * 3),
+                                    trimesh.creation.box(extents=(0.03,) * 3).apply_translation([0.1, 0, 0])])
+    half_sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.04)
+    half_sphere.update_faces(half_sphere.triangles_center[:, 2] > 0)
+    flat = trimesh.Trimesh([[0, 0, 0], [0.05, 0, 0], [0, 0.05, 0], [0.05, 0.05, 0]], [[0, 1, 2], [1, 3, 2]])
+    (tmp_path / "nan.obj").write_text("v nan 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0 0 0.05\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n")
+    (tmp_path / "notes.txt").write_text("hello")
+    return {
+        "missing": (tmp_path / "missing.stl", "not found"),
+        "unsupported": (tmp_path / "notes.txt", "unsupported"),
+        "nan": (tmp_path / "nan.obj", "NaN"),
+        "disconnected": (write(two, tmp_path / "two.stl"), "disconnected"),
+        "unrepairable": (write(half_sphere, tmp_path / "half.ply"), "watertight"),
+        "flat": (write(flat, tmp_path / "flat.obj"), "degenerate"),
+        "huge": (write(trimesh.creation.box(extents=(3.0, 1.0, 1.0)), tmp_path / "huge.stl"), "absurd scale"),
+    }
+
+
+def test_import_bad_meshes_fail_cleanly(tmp_path):
+    root = tmp_path / "objs"
+    for label, (path, message) in _bad_meshes(tmp_path).items():
+        with pytest.raises(InputError, match=message):
+            import_mesh(path, set_name="custom", name=label, root=root)
+        assert not (root / "custom" / label).exists(), label
+    good = write(trimesh.creation.box(extents=(0.05, 0.04, 0.03)), tmp_path / "good.stl")
+    import_mesh(good, set_name="custom", name="dup", root=root)
+    with pytest.raises(InputError, match="already exists"):
+        import_mesh(good, set_name="custom", name="dup", root=root)
+    with pytest.raises(InputError, match="evaluation sets"):
+        import_mesh(good, set_name="basic", name="x", root=root)
+
+
+def test_import_cli_exit_codes(tmp_path):
+    runner = CliRunner()
+    good = write(trimesh.creation.box(extents=(0.05, 0.04, 0.03)), tmp_path / "good.stl")
+    args = ["objects", "import", str(good), "--name", "good", "--root", str(tmp_path / "objs"), "--json"]
+    ok = runner.invoke(app, args)
+    assert ok.exit_code == 0, ok.output
+    assert json.loads(ok.stdout.strip().splitlines()[-1])["ok"]
+    dup = runner.invoke(app, args)
+    assert dup.exit_code == 2 and "already exists" in json.loads(dup.stdout.strip().splitlines()[-1])["error"]
+
+
+# -- corpus ---------------------------------------------------------------------------------------
+
+
+def test_corpus_specs_are_deterministic_and_prefix_stable():
+    from suctionbench.objects.corpus import corpus_specs
+
+    a, b = corpus_specs(30, seed=7), corpus_specs(30, seed=7)
+    assert a == b
+    assert corpus_specs(10, seed=7) == a[:10]  # spec i depends on (seed, i) only
+    assert corpus_specs(10, seed=8) != a[:10]
+    assert len({s.name for s in a}) == 30 and all(s.set == "train" for s in a)
+
+
+def test_corpus_is_disjoint_from_the_evaluation_sets(tmp_path):
+    from suctionbench.objects.corpus_build import evaluation_fingerprints, generate_corpus
+
+    first = generate_corpus(24, seed=3, out=tmp_path)
+    assert first["built"] == 24 and first["eval_overlap"] == 0
+    eval_hashes, _ = evaluation_fingerprints()
+    manifest = json.loads((tmp_path / "corpus.json").read_text())
+    corpus_hashes = {o["geometry_hash"] for o in manifest["objects"]}
+    assert len(eval_hashes) == sum(SIZES.values()) and not corpus_hashes & eval_hashes
+    again = generate_corpus(24, seed=3, out=tmp_path)  # cached: nothing rebuilt, same manifest
+    assert again["cached"] == 24 and json.loads((tmp_path / "corpus.json").read_text()) == manifest

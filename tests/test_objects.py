@@ -119,7 +119,8 @@ def _bad_meshes(tmp_path):
     half_sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.04)
     half_sphere.update_faces(half_sphere.triangles_center[:, 2] > 0)
     flat = trimesh.Trimesh([[0, 0, 0], [0.05, 0, 0], [0, 0.05, 0], [0.05, 0.05, 0]], [[0, 1, 2], [1, 3, 2]])
-    (tmp_path / "nan.obj").write_text("v nan 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0 0 0.05\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n")
+    nan_obj = "v nan 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0 0 0.05\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n"
+    (tmp_path / "nan.obj").write_text(nan_obj)
     (tmp_path / "notes.txt").write_text("hello")
     return {
         "missing": (tmp_path / "missing.stl", "not found"),

@@ -383,6 +383,36 @@ def objects_build(
     _run(as_json, body)
 
 
+@objects_app.command("stats")
+def objects_stats(
+    set_name: Annotated[str | None, typer.Option("--set", help="Only this set.")] = None,
+    grasps: Annotated[int, typer.Option(help="Surface grasps per object.")] = 300,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Per-set difficulty: share of surface grasps that seal and that are robust (rwr > 0.2)."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.objects.registry import list_objects
+        from suctionbench.objects.spec import SETS
+        from suctionbench.objects.stats import set_stats
+
+        if grasps < 1:
+            raise InputError(f"--grasps {grasps}: must be at least 1")
+        sets = [set_name] if set_name else list(SETS)
+        result = {}
+        for name in sets:
+            records = list_objects(name)
+            with _progress(len(records), name, not as_json) as advance:
+                result[name] = set_stats(records, grasps, seed, progress=advance)
+        if not as_json:
+            _print_rows("object sets", [{"set": k, **{c: v for c, v in r.items() if c != "per_object"}}
+                                        for k, r in result.items()])
+        return {"grasps_per_object": grasps, "seed": seed, "sets": result}
+
+    _run(as_json, body)
+
+
 @objects_app.command("import")
 def objects_import(
     path: Annotated[str, typer.Argument(help="Mesh file: OBJ, STL, PLY, OFF, GLB.")],

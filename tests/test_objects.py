@@ -182,3 +182,15 @@ def test_corpus_is_disjoint_from_the_evaluation_sets(tmp_path):
     assert len(eval_hashes) == sum(SIZES.values()) and not corpus_hashes & eval_hashes
     again = generate_corpus(24, seed=3, out=tmp_path)  # cached: nothing rebuilt, same manifest
     assert again["cached"] == 24 and json.loads((tmp_path / "corpus.json").read_text()) == manifest
+
+
+def test_adversarial_set_is_clearly_harder_but_still_sealable():
+    # The adversarial shapes are made of surfaces curved differently in different directions,
+    # ridges and thin features, so few 15 mm seals exist - but each object keeps some.
+    from suctionbench.objects.stats import set_stats
+
+    typical = set_stats(list_objects("typical")[::5], grasps=100, seed=0)
+    adversarial = set_stats(list_objects("adversarial"), grasps=300, seed=0)
+    assert adversarial["seal_share"] < 0.5 * typical["seal_share"]
+    for obj in adversarial["per_object"]:
+        assert obj["seal_share"] * 300 >= 3, obj

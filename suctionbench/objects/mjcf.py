@@ -9,11 +9,18 @@ import numpy as np
 
 from suctionbench.objects.build import ObjectRecord
 
+OBJECT_CONTYPE, OBJECT_CONAFFINITY = 1, 7
+"""Collision bits of objects: collide with the environment, the robot and the cup (sim/cup.py)."""
+
 TORSIONAL_FRICTION = 0.005
 """Torsional friction (m) of object geoms, used by condim 6 contacts with the suction cup."""
 
 ROLLING_FRICTION = 0.0001
 """Rolling friction (m) of object geoms."""
+
+CONTACT_SOLREF = (0.005, 1.0)
+"""MuJoCo solref of object contacts (5 ms, critically damped): rigid objects, stiffer than the
+default 20 ms so that drops do not sink objects into each other."""
 
 
 def add_object_body(
@@ -41,7 +48,8 @@ def add_object_body(
         mesh.userface = np.asarray(part.faces, dtype=np.int32).ravel().tolist()
         body.add_geom(
             name=f"{name}_collision_{i:03d}", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh.name,
-            friction=friction, condim=6, group=3, density=0.0,
+            friction=friction, condim=6, group=3, density=0.0, solref=list(CONTACT_SOLREF),
+            contype=OBJECT_CONTYPE, conaffinity=OBJECT_CONAFFINITY,
         )
     visual = record.mesh()
     vmesh = spec.add_mesh(name=f"{name}_visual")

@@ -1,0 +1,1 @@
+"""Grasp policies: heuristics, the GQ-CNN cross-entropy policy, and known-state analytic ranking."""

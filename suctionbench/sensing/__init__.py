@@ -1,0 +1,1 @@
+"""Sensing: camera models and presets, depth rendering, noise, grasp thumbnails."""

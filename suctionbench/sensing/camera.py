@@ -1,0 +1,545 @@
+"""Pinhole depth cameras: intrinsics and named presets, the paper's camera-pose distribution, and
+MuJoCo glue that places a camera with exact intrinsics in an MjSpec and renders metric depth.
+
+Frames and pixels
+-----------------
+Everything here uses the OpenCV optical frame for cameras: x right, y down, z forward along the
+optical axis. A camera pose is a 4x4 world-from-camera transform in that frame, so a point p_cam
+in the camera frame is ``pose[:3, :3] @ p_cam + pose[:3, 3]`` in the world. Pixel coordinates
+(u, v) are (column, row) with integer values at pixel *centres* (OpenCV), so the pixel that holds
+the continuous point (u, v) is ``depth[round(v), round(u)]``, and the image spans
+[-0.5, width - 0.5] x [-0.5, height - 0.5].
+
+MuJoCo cameras look along their -z axis with y up. The two frames differ by a rotation of pi about
+the x axis, `MUJOCO_FROM_OPENCV` (its own inverse); `add_camera` and `camera_pose_from_data`
+convert so that callers only ever see OpenCV poses.
+
+Depth is z-depth (distance along the optical axis, not along the ray), in metres, float32, with 0
+meaning "no return" (nothing hit), the convention of Dex-Net / GQ-CNN depth images.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, fields, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from suctionbench.errors import InputError
+
+if TYPE_CHECKING:
+    import mujoco
+
+
+# --------------------------------------------------------------------------------------------------
+# Intrinsics
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class CameraIntrinsics:
+    """A distortion-free pinhole depth camera (rendered images have no lens distortion, so none is
+    modelled) plus the depth range over which the real sensor returns valid measurements."""
+
+    name: str
+    """Preset or user-given name, recorded in datasets and model cards so that a model can be
+    matched to the camera it was trained for."""
+
+    width: int
+    """Image width in pixels (number of columns)."""
+
+    height: int
+    """Image height in pixels (number of rows)."""
+
+    fx: float
+    """Focal length along x (columns) in pixels."""
+
+    fy: float
+    """Focal length along y (rows) in pixels."""
+
+    cx: float
+    """Principal point column in pixels, pixel-centre convention (the exact centre of a 640-wide
+    image is 319.5)."""
+
+    cy: float
+    """Principal point row in pixels, pixel-centre convention."""
+
+    min_depth: float
+    """Near end of the sensor's working range in metres: closer surfaces give no valid return on
+    the real device. Used to fit the camera-pose distribution to the sensor, and by noise models."""
+
+    max_depth: float
+    """Far end of the sensor's working range in metres."""
+
+    def __post_init__(self) -> None:
+        label = f"camera intrinsics '{self.name}'"
+        if not isinstance(self.name, str) or not self.name:
+            raise InputError(f"camera intrinsics: name = {self.name!r} must be a non-empty string")
+        for key in ("width", "height"):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+                raise InputError(f"{label}: {key} = {value!r} must be a positive integer")
+        for key in ("fx", "fy", "cx", "cy", "min_depth", "max_depth"):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, int | float | np.number):
+                raise InputError(f"{label}: {key} = {value!r} must be a number")
+            if not math.isfinite(value):
+                raise InputError(f"{label}: {key} = {value!r} must be finite")
+        if self.fx <= 0 or self.fy <= 0:
+            raise InputError(f"{label}: focal lengths must be positive (fx = {self.fx}, fy = {self.fy})")
+        if not -0.5 <= self.cx <= self.width - 0.5:
+            raise InputError(
+                f"{label}: principal point cx = {self.cx} lies outside the image [-0.5, {self.width - 0.5}]"
+            )
+        if not -0.5 <= self.cy <= self.height - 0.5:
+            raise InputError(
+                f"{label}: principal point cy = {self.cy} lies outside the image [-0.5, {self.height - 0.5}]"
+            )
+        if self.min_depth <= 0:
+            raise InputError(f"{label}: min_depth = {self.min_depth} must be positive")
+        if self.min_depth >= self.max_depth:
+            raise InputError(f"{label}: min_depth = {self.min_depth} must be below max_depth = {self.max_depth}")
+
+    @property
+    def matrix(self) -> np.ndarray:
+        """The 3x3 calibration matrix K (maps camera-frame rays to homogeneous pixels)."""
+        return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
+
+    @property
+    def fov(self) -> tuple[float, float]:
+        """Horizontal and vertical field of view in radians, measured edge to edge of the image."""
+        left, right = self.cx + 0.5, self.width - 0.5 - self.cx
+        top, bottom = self.cy + 0.5, self.height - 0.5 - self.cy
+        return (
+            math.atan(left / self.fx) + math.atan(right / self.fx),
+            math.atan(top / self.fy) + math.atan(bottom / self.fy),
+        )
+
+    def project(self, points_cam: np.ndarray) -> np.ndarray:
+        """Pixel coordinates (..., 2) = (u, v) of camera-frame points (..., 3).
+
+        Points on or behind the image plane (z <= 0) have no image and give NaN.
+        """
+        p = np.asarray(points_cam, dtype=float)
+        if p.shape[-1] != 3:
+            raise ValueError(f"points must have shape (..., 3), got {p.shape}")
+        z = p[..., 2]
+        safe = np.where(z > 0, z, np.nan)
+        u = self.fx * p[..., 0] / safe + self.cx
+        v = self.fy * p[..., 1] / safe + self.cy
+        return np.stack([u, v], axis=-1)
+
+    def deproject(self, depth: np.ndarray) -> np.ndarray:
+        """Camera-frame points (H, W, 3) of a z-depth image (H, W); zero depth gives the origin.
+
+        Pixel (row v, column u) is back-projected through its centre, matching `project`.
+        """
+        depth = np.asarray(depth)
+        if depth.shape != (self.height, self.width):
+            raise ValueError(f"depth image has shape {depth.shape}, camera '{self.name}' expects "
+                             f"{(self.height, self.width)}")
+        z = depth.astype(float)
+        u = np.arange(self.width, dtype=float)[None, :]
+        v = np.arange(self.height, dtype=float)[:, None]
+        return np.stack([(u - self.cx) * z / self.fx, (v - self.cy) * z / self.fy, z], axis=-1)
+
+    def scaled(self, factor: float, *, name: str | None = None) -> CameraIntrinsics:
+        """The same camera at `factor` times the resolution (e.g. 0.5 for 2x2 binning).
+
+        The image must scale to whole pixels. Focal lengths scale by the factor and the principal
+        point scales about the image corner (-0.5, -0.5), which keeps every ray on the same
+        (fractional) image position.
+        """
+        width, height = self.width * factor, self.height * factor
+        if not (factor > 0 and float(width).is_integer() and float(height).is_integer()):
+            raise InputError(f"camera '{self.name}': scale {factor} does not give a whole-pixel image "
+                             f"({self.width} x {self.height} -> {width} x {height})")
+        return replace(
+            self, name=name or f"{self.name}@{factor:g}", width=int(width), height=int(height),
+            fx=self.fx * factor, fy=self.fy * factor,
+            cx=(self.cx + 0.5) * factor - 0.5, cy=(self.cy + 0.5) * factor - 0.5,
+        )
+
+
+# Presets. Rendered images have no distortion and the presets use a centred principal point with
+# square pixels: a real unit's calibration differs by a few pixels and a few percent in focal
+# length, so for a specific device load its calibrated intrinsics with `load_intrinsics_toml`.
+
+PRIMESENSE = CameraIntrinsics(
+    # FACTS section 7: the Primesense Carmine 1.08/1.09 parameters used by Dex-Net (fx = fy = 525,
+    # centred principal point) and the Carmine 1.09 short-range working range of ~0.35-1.4 m.
+    name="primesense", width=640, height=480, fx=525.0, fy=525.0, cx=319.5, cy=239.5,
+    min_depth=0.35, max_depth=1.4,
+)
+"""Primesense Carmine as used by Dex-Net 3.0: the default, matching the paper's training data."""
+
+REALSENSE_D415 = CameraIntrinsics(
+    # Intel RealSense D400 datasheet: D415 depth FOV (HD, 16:9) H 65 +- 2 deg x V 40 +- 1 deg,
+    # 1280 x 720 being its best depth resolution. fx = fy = 640 / tan(32.5 deg) = 1004.6 px
+    # (implied V FOV 39.4 deg, within the datasheet's tolerance). min_depth is Intel's Min-Z rule,
+    # focal length (px) x baseline / 126 px of disparity search = 1004.6 x 0.055 m / 126 = 0.44 m;
+    # max_depth is the 3 m end of Intel's stated ideal range.
+    name="realsense-d415", width=1280, height=720, fx=1004.6, fy=1004.6, cx=639.5, cy=359.5,
+    min_depth=0.44, max_depth=3.0,
+)
+"""Intel RealSense D415 depth stream at 1280 x 720 (nominal, from the datasheet field of view)."""
+
+REALSENSE_D435 = CameraIntrinsics(
+    # Intel RealSense D400 datasheet: D435 depth FOV (HD) H 87 +- 3 deg x V 58 +- 1 deg; 848 x 480 is
+    # Intel's recommended depth resolution for the D435. fx = fy = 424 / tan(43.5 deg) = 446.8 px
+    # (implied V FOV 56.5 deg). A unit's rs-enumerate-devices output (realsense-ros issue #2788)
+    # shows fx = 424.2 px at 848 wide, i.e. 90 deg, inside the datasheet tolerance.
+    # min_depth by the Min-Z rule: 446.8 x 0.050 m baseline / 126 = 0.18 m; max_depth 3 m as above.
+    name="realsense-d435", width=848, height=480, fx=446.8, fy=446.8, cx=423.5, cy=239.5,
+    min_depth=0.18, max_depth=3.0,
+)
+"""Intel RealSense D435 depth stream at 848 x 480 (nominal, from the datasheet field of view)."""
+
+ZIVID_2 = CameraIntrinsics(
+    # Zivid 2 (M70) full-resolution 3D capture: 1944 x 1200 (Zivid docs, "Sampling (3D)" page).
+    # No official intrinsics table was found; fx = fy = 1800 px gives a 56.7 deg x 36.9 deg field
+    # of view, matching the ~57 deg horizontal field of view quoted for the M70 (about 0.77 m wide
+    # at its 0.7 m optimal distance). Working range 0.35-1.1 m is the M70's nominal one.
+    # Treat all of this as nominal: use `zivid.experimental.calibration.intrinsics(camera)` and a
+    # TOML file for a real unit.
+    name="zivid-2", width=1944, height=1200, fx=1800.0, fy=1800.0, cx=971.5, cy=599.5,
+    min_depth=0.35, max_depth=1.1,
+)
+"""Zivid 2 M70 structured-light camera at full resolution (nominal values)."""
+
+CAMERA_PRESETS: dict[str, CameraIntrinsics] = {
+    c.name: c for c in (PRIMESENSE, REALSENSE_D415, REALSENSE_D435, ZIVID_2)
+}
+"""Named camera presets; `primesense` is the default (the camera of the paper's dataset)."""
+
+DEFAULT_CAMERA = "primesense"
+"""Name of the default preset."""
+
+
+def camera_preset(name: str) -> CameraIntrinsics:
+    """Return a named camera preset (case-insensitive), or raise InputError naming the known ones."""
+    try:
+        return CAMERA_PRESETS[name.strip().lower()]
+    except (KeyError, AttributeError):
+        known = ", ".join(sorted(CAMERA_PRESETS))
+        raise InputError(f"camera preset '{name}' is unknown (known: {known})") from None
+
+
+def intrinsics_from_dict(
+    data: dict[str, Any], *, source: str = "camera intrinsics", default_name: str = "custom"
+) -> CameraIntrinsics:
+    """Build intrinsics from a dict whose keys are the dataclass fields; a missing `name` becomes
+    `default_name`. Errors name `source` (e.g. the file) and the offending key."""
+    names = [f.name for f in fields(CameraIntrinsics)]
+    unknown = sorted(set(data) - set(names))
+    if unknown:
+        raise InputError(f"{source}: unknown key(s) {', '.join(unknown)} (expected {', '.join(names)})")
+    missing = [key for key in names if key not in data and key != "name"]
+    if missing:
+        raise InputError(f"{source}: missing key(s) {', '.join(missing)}")
+    kwargs = dict(data)
+    kwargs.setdefault("name", default_name)
+    for key in ("width", "height"):
+        value = kwargs[key]
+        if isinstance(value, float) and value.is_integer():
+            kwargs[key] = int(value)
+    try:
+        return CameraIntrinsics(**kwargs)
+    except InputError as exc:
+        raise InputError(f"{source}: {exc}") from None
+
+
+def load_intrinsics_toml(path: str | Path) -> CameraIntrinsics:
+    """Load user intrinsics from a TOML file with one key per `CameraIntrinsics` field, e.g.::
+
+        name = "my-d435"
+        width = 848
+        height = 480
+        fx = 425.19
+        fy = 425.19
+        cx = 422.97
+        cy = 238.47
+        min_depth = 0.18
+        max_depth = 3.0
+
+    `name` defaults to the file name without its suffix. Raises InputError naming the file.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        raise InputError(f"camera intrinsics '{path}': file not found") from None
+    except (IsADirectoryError, PermissionError, UnicodeDecodeError) as exc:
+        raise InputError(f"camera intrinsics '{path}': cannot be read ({exc})") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"camera intrinsics '{path}': not valid TOML ({exc})") from None
+    return intrinsics_from_dict(data, source=str(path), default_name=path.stem or "custom")
+
+
+def resolve_camera(spec: str | Path) -> CameraIntrinsics:
+    """A preset name or the path of an intrinsics TOML file (what `--camera` accepts)."""
+    text = str(spec)
+    if text.lower().endswith(".toml") or Path(text).is_file():
+        return load_intrinsics_toml(text)
+    return camera_preset(text)
+
+
+# --------------------------------------------------------------------------------------------------
+# Camera poses
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class CameraPoseConfig:
+    """The paper's camera-pose distribution p(T_c) ("Details of Distributions"): spherical
+    coordinates about a target point, uniform in each coordinate, with the optical axis through
+    the target (the paper's table centre)."""
+
+    radius_range: tuple[float, float] = (0.5, 0.7)
+    """Range of the distance r in metres from the camera centre to the target, which is also the
+    target's depth since it lies on the optical axis. Paper: [0.5, 0.7]."""
+
+    azimuth_range: tuple[float, float] = (0.0, 2.0 * math.pi)
+    """Range of the azimuth theta in radians, measured in the world xy plane from +x towards +y.
+    Paper: [0, 2 pi)."""
+
+    polar_range: tuple[float, float] = (0.01 * math.pi, 0.1 * math.pi)
+    """Range of the polar angle phi in radians between the world +z axis and the direction from
+    the target to the camera (0 = straight overhead). Paper: [0.01 pi, 0.1 pi], i.e. 1.8-18 deg."""
+
+    def __post_init__(self) -> None:
+        bounds = {  # key -> (smallest allowed low, exclusive ceiling of high)
+            "radius_range": (0.0, math.inf),
+            "azimuth_range": (-math.inf, math.inf),
+            "polar_range": (0.0, math.pi / 2),
+        }
+        for key, (floor, ceiling) in bounds.items():
+            value = getattr(self, key)
+            ok = (
+                len(value) == 2
+                and all(isinstance(x, int | float) and math.isfinite(x) for x in value)
+                and floor <= value[0] <= value[1] < ceiling
+                and (key != "radius_range" or value[0] > 0.0)
+            )
+            if not ok:
+                raise InputError(f"camera pose config: {key} = {value!r} is not a valid (low, high) range")
+
+    def for_camera(self, intrinsics: CameraIntrinsics) -> CameraPoseConfig:
+        """This distribution with its radius range fitted into the camera's working range.
+
+        The radius range is clipped to [min_depth, max_depth]; where it lies wholly outside, it
+        keeps its width and slides to the nearest end of the working range (shrinking only if the
+        working range is narrower). Clipping rather than scaling by focal length: the paper's
+        range was tuned on a real robot (by average precision of the labels), so a camera that can
+        see the scene from there should reproduce it unchanged, and every preset's working range
+        contains [0.5, 0.7] m; scaling to keep object sizes in pixels would instead move, e.g., the
+        Zivid preset (fx = 1800 px) to 1.7-2.4 m, beyond its range. Only the target depth is
+        fitted; object tops are closer than the radius by up to their height.
+        """
+        lo, hi = self.radius_range
+        near, far = intrinsics.min_depth, intrinsics.max_depth
+        new_lo, new_hi = max(lo, near), min(hi, far)
+        if new_lo > new_hi:  # wholly outside: keep the width, slide inside
+            width = min(hi - lo, far - near)
+            new_lo, new_hi = (near, near + width) if hi < near else (far - width, far)
+        return replace(self, radius_range=(new_lo, new_hi))
+
+
+CAMERA_POSE_PAPER = CameraPoseConfig()
+"""The paper's distribution: r in [0.5, 0.7] m, azimuth in [0, 2 pi), polar in [0.01 pi, 0.1 pi]."""
+
+
+def camera_pose_from_spherical(target, radius: float, azimuth: float, polar: float) -> np.ndarray:
+    """World-from-camera pose (4x4, OpenCV frame) at spherical coordinates about `target`.
+
+    The camera sits at target + r (sin phi cos theta, sin phi sin theta, cos phi) with its z axis
+    pointing at the target. Roll about the optical axis is fixed so that the camera x axis is
+    horizontal and the image's down direction (+y) points, seen from above, towards the camera's
+    own side of the target, as for a person looking down at a table: the near side of the table is
+    at the bottom of the image. The roll follows the azimuth (the image turns with the camera
+    around the table), and it stays defined at phi = 0 because it is built from theta, not from
+    the (then vertical) viewing direction.
+    """
+    target = np.asarray(target, dtype=float).reshape(3)
+    st, ct, sp, cp = math.sin(azimuth), math.cos(azimuth), math.sin(polar), math.cos(polar)
+    outward = np.array([sp * ct, sp * st, cp])  # target -> camera
+    z = -outward
+    horizontal = np.array([ct, st, 0.0])
+    y = horizontal - (horizontal @ z) * z  # in the vertical plane through the axis, leaning outwards
+    y /= np.linalg.norm(y)
+    x = np.cross(y, z)  # horizontal, completes a right-handed frame (x = y cross z)
+    pose = np.eye(4)
+    pose[:3, :3] = np.column_stack([x, y, z])
+    pose[:3, 3] = target + radius * outward
+    return pose
+
+
+def sample_camera_pose(
+    rng: np.random.Generator, target, config: CameraPoseConfig = CAMERA_POSE_PAPER
+) -> np.ndarray:
+    """Draw one world-from-camera pose (4x4, OpenCV frame) from `config` about `target`.
+
+    Draws r, theta, phi (in that order, one call) uniformly from their ranges, so the pose is a
+    deterministic function of the generator state.
+    """
+    (r0, r1), (a0, a1), (p0, p1) = config.radius_range, config.azimuth_range, config.polar_range
+    radius, azimuth, polar = rng.uniform([r0, a0, p0], [r1, a1, p1])
+    return camera_pose_from_spherical(target, radius, azimuth, polar)
+
+
+# --------------------------------------------------------------------------------------------------
+# MuJoCo glue
+# --------------------------------------------------------------------------------------------------
+
+MUJOCO_FROM_OPENCV = np.diag([1.0, -1.0, -1.0])
+"""Rotation from OpenCV optical-frame coordinates to MuJoCo camera-frame coordinates (and back:
+it is its own inverse). R_world_mujoco = R_world_opencv @ MUJOCO_FROM_OPENCV."""
+
+_PIXEL_PITCH = 3e-6
+"""Nominal sensor pixel pitch (m) used to express pixel intrinsics in MuJoCo's length units. Only
+ratios matter for rendering; a realistic value keeps MuJoCo's frustum visualisation sensible."""
+
+
+def mujoco_principal_pixel(intrinsics: CameraIntrinsics) -> tuple[float, float]:
+    """MuJoCo `principalpixel` offsets that put the rendered principal point at (cx, cy).
+
+    MuJoCo 3.17 offsets the principal point from the image centre ((W - 1) / 2, (H - 1) / 2) by
+    *minus* the attribute in both image directions: found by rendering off-axis markers (the x
+    sign is opposite to MuJoCo's x-right camera axis), and guarded by tests/test_camera.py, which
+    renders with a deliberately off-centre principal point.
+    """
+    return ((intrinsics.width - 1) / 2 - intrinsics.cx, (intrinsics.height - 1) / 2 - intrinsics.cy)
+
+
+def add_camera(
+    spec: mujoco.MjSpec, name: str, pose_world: np.ndarray, intrinsics: CameraIntrinsics
+) -> mujoco.MjsCamera:
+    """Add a fixed camera named `name` to the world body of `spec` with exact pinhole intrinsics.
+
+    `pose_world` is the world-from-camera transform in the OpenCV frame. The camera gets MuJoCo's
+    physical intrinsics (resolution, sensor size, focal length and principal point in pixels),
+    which take precedence over fovy, so fx != fy and off-centre principal points are rendered
+    exactly; fovy is still set to the vertical field of view for tools that read it. The
+    offscreen buffer is enlarged when needed so a `DepthRenderer` of this size can be created.
+    """
+    import mujoco
+
+    pose = np.asarray(pose_world, dtype=float)
+    if pose.shape != (4, 4):
+        raise ValueError(f"pose_world must be a 4x4 transform, got shape {pose.shape}")
+    rotation = pose[:3, :3] @ MUJOCO_FROM_OPENCV
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, np.ascontiguousarray(rotation).ravel())
+    camera = spec.worldbody.add_camera(name=name, pos=pose[:3, 3].tolist(), quat=quat.tolist())
+    w, h = intrinsics.width, intrinsics.height
+    camera.resolution = [w, h]
+    camera.sensor_size = [w * _PIXEL_PITCH, h * _PIXEL_PITCH]
+    camera.focal_pixel = [intrinsics.fx, intrinsics.fy]
+    camera.principal_pixel = list(mujoco_principal_pixel(intrinsics))
+    camera.fovy = math.degrees(2.0 * math.atan(h / (2.0 * intrinsics.fy)))
+    visual = spec.visual.global_
+    visual.offwidth = max(visual.offwidth, w)
+    visual.offheight = max(visual.offheight, h)
+    return camera
+
+
+def camera_pose_from_data(model: mujoco.MjModel, data: mujoco.MjData, camera_name: str) -> np.ndarray:
+    """Current world-from-camera pose (4x4, OpenCV frame) of a model camera (after mj_forward or
+    mj_kinematics), e.g. for cameras attached to moving bodies."""
+    import mujoco
+
+    cam_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera_name)
+    if cam_id < 0:
+        raise ValueError(f"model has no camera named '{camera_name}'")
+    pose = np.eye(4)
+    pose[:3, :3] = data.cam_xmat[cam_id].reshape(3, 3) @ MUJOCO_FROM_OPENCV
+    pose[:3, 3] = data.cam_xpos[cam_id]
+    return pose
+
+
+class DepthRenderer:
+    """Metric z-depth images of model cameras through MuJoCo's offscreen OpenGL renderer.
+
+    One renderer serves every camera of the model that has the intrinsics' resolution. Only the
+    geom groups in `geom_groups` are drawn (MuJoCo's default 0-2, where suctionbench puts visual
+    geoms; collision-only parts sit in group 3), and sites and tendons are hidden because a real
+    depth sensor does not see them. Headless machines need MUJOCO_GL=egl (or osmesa) in the
+    environment before mujoco is first imported. Release the OpenGL context with `close()` or a
+    `with` block: contexts left to the garbage collector fail noisily at interpreter exit.
+    """
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        intrinsics: CameraIntrinsics,
+        *,
+        geom_groups: tuple[int, ...] = (0, 1, 2),
+    ) -> None:
+        import mujoco
+
+        self._model = model
+        self.intrinsics = intrinsics
+        extent = float(model.stat.extent)
+        near, far = model.vis.map.znear * extent, model.vis.map.zfar * extent
+        if near >= intrinsics.min_depth or far <= intrinsics.max_depth:
+            raise ValueError(
+                f"clip planes [{near:.3f}, {far:.3f}] m (visual.map.znear/zfar x stat.extent = {extent:.3f}) "
+                f"do not contain camera '{intrinsics.name}''s working range "
+                f"[{intrinsics.min_depth}, {intrinsics.max_depth}] m; lower spec.visual.map.znear or raise zfar"
+            )
+        # The renderer maps the cleared depth buffer (nothing drawn) to exactly the far plane,
+        # computed in float32; anything at or beyond (1 - 1e-6) far is background.
+        self._background = np.float32(far) * np.float32(1.0 - 1e-6)
+        try:
+            self._renderer = mujoco.Renderer(model, height=intrinsics.height, width=intrinsics.width)
+        except ValueError:
+            raise
+        except Exception as exc:  # no OpenGL context: the usual cause is a missing MUJOCO_GL
+            raise RuntimeError(
+                f"cannot create an OpenGL context for depth rendering ({exc}); on a headless machine set "
+                "MUJOCO_GL=egl (or osmesa) before mujoco is imported"
+            ) from exc
+        self._renderer.enable_depth_rendering()
+        self._option = mujoco.MjvOption()
+        self._option.geomgroup[:] = [1 if g in geom_groups else 0 for g in range(len(self._option.geomgroup))]
+        self._option.sitegroup[:] = 0
+        self._option.flags[mujoco.mjtVisFlag.mjVIS_TENDON] = 0
+
+    def render(self, data: mujoco.MjData, camera_name: str) -> np.ndarray:
+        """Depth image (H, W) float32 in metres along the optical axis; 0 where nothing is hit
+        (including beyond the far clip plane)."""
+        import mujoco
+
+        if self._renderer is None:
+            raise RuntimeError("DepthRenderer.render called after close()")
+        cam_id = mujoco.mj_name2id(self._model, mujoco.mjtObj.mjOBJ_CAMERA, camera_name)
+        if cam_id < 0:
+            raise ValueError(f"model has no camera named '{camera_name}'")
+        resolution = tuple(int(x) for x in self._model.cam_resolution[cam_id])
+        expected = (self.intrinsics.width, self.intrinsics.height)
+        if resolution != expected:
+            raise ValueError(
+                f"camera '{camera_name}' has resolution {resolution}, this renderer renders {expected} "
+                f"(camera '{self.intrinsics.name}'); add the camera with add_camera and these intrinsics"
+            )
+        self._renderer.update_scene(data, camera=cam_id, scene_option=self._option)
+        depth = self._renderer.render()
+        depth[depth >= self._background] = 0.0
+        return depth
+
+    def close(self) -> None:
+        """Free the OpenGL context (idempotent)."""
+        renderer, self._renderer = getattr(self, "_renderer", None), None
+        if renderer is not None:
+            renderer.close()
+
+    def __enter__(self) -> DepthRenderer:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()

@@ -1,0 +1,1 @@
+"""MuJoCo simulation: YuMi scene, suction cup, IK, pick episodes."""

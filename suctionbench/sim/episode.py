@@ -1,0 +1,354 @@
+"""One simulated pick episode: place the object, observe, move to the grasp, seal, lift, carry to
+the bin, hold, release - with a recorded outcome and failure reason.
+
+Motion: inverse kinematics for the tool tip (position + tool axis; the cup is symmetric about
+its axis), joint trajectories with quintic (minimum-jerk) time scaling stretched until every
+joint stays under its YuMi speed limit, straight Cartesian lines for the approach and the lift.
+The arm follows through stiff position actuators. Vacuum: `SuctionController`.
+
+Success (issue 4): the object is lifted clear of the table, carried over the bin and still held at
+the end of the hold phase. An episode whose state goes non-finite, explodes or interpenetrates is
+`invalid`, never a success.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from suctionbench.sim.cup import SuctionController
+from suctionbench.sim.ik import solve_ik
+from suctionbench.sim.scene import Scene
+from suctionbench.sim.yumi import HOME_RIGHT, JOINT_SPEED_LIMITS, RIGHT_ARM_JOINTS
+
+FAILURES = (
+    "unreachable",
+    "collision",
+    "no_seal",
+    "seal_lost_lift",
+    "seal_lost_transport",
+    "seal_lost_hold",
+    "not_lifted",
+    "unstable",
+)
+"""Failure reasons, in the order of the episode's phases."""
+
+
+@dataclass(frozen=True)
+class EpisodeConfig:
+    """Timing and geometry of a pick (SI units)."""
+
+    settle_time: float = 1.5
+    """Longest time given to a dropped object to come to rest."""
+
+    drop_height: float = 0.12
+    """Height of the object's centre above the table when dropped."""
+
+    drop_spread: float = 0.04
+    """Half-width of the square around the workspace centre where objects are dropped."""
+
+    pregrasp_offset: float = 0.06
+    """Distance before the target along the approach where the straight approach starts."""
+
+    press_depth: float = 0.004
+    """How far past the surface the approach aims, so the bellow compresses."""
+
+    compression_stop: float = 0.002
+    """The approach stops once the bellow is compressed this much (contact made)."""
+
+    approach_speed: float = 0.08
+    """Tool speed along the approach line (m/s)."""
+
+    vacuum_dwell: float = 0.15
+    """Time with the vacuum on before lifting (the cup evacuates)."""
+
+    lift_height: float = 0.15
+    """Straight lift after sealing (m)."""
+
+    lift_speed: float = 0.15
+    """Average tool speed while lifting (m/s)."""
+
+    transport_height: float = 0.25
+    """Height of the tool tip above the table over the bin."""
+
+    speed_scale: float = 0.5
+    """Fraction of the YuMi's joint speed limits used by trajectories."""
+
+    hold_time: float = 0.5
+    """Time the object must stay held over the bin."""
+
+    release_time: float = 0.4
+    """Time after venting, for the object to fall into the bin."""
+
+    clearance: float = 0.01
+    """An object counts as lifted when its lowest point is this far above the table."""
+
+    max_penetration: float = 0.01
+    """Any contact deeper than this marks the simulation as unstable."""
+
+    max_speed: float = 20.0
+    """Any body faster than this (m/s) marks the simulation as unstable."""
+
+
+@dataclass
+class EpisodeResult:
+    """Outcome of one episode."""
+
+    success: bool
+    failure: str | None
+    valid: bool
+    seal_time: float | None
+    peak_slip: float
+    lifted: bool
+    in_bin: bool
+    sim_time: float
+    wall_time: float
+    detail: str | None = None
+    phases: dict[str, float] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        return dict(self.__dict__)
+
+
+class _Unstable(Exception):
+    """Raised inside the episode when the simulation state becomes invalid."""
+
+
+class _Failure(Exception):
+    """Raised inside the episode to end it with a failure reason."""
+
+
+class PickEpisode:
+    """Runs pick episodes in a compiled scene; one instance per scene (reusable across resets)."""
+
+    def __init__(self, scene: Scene, config: EpisodeConfig = EpisodeConfig()):
+        self.scene = scene
+        self.config = config
+        self.model = scene.model
+        self.data = mujoco.MjData(self.model)
+        self.cup = SuctionController(self.model, scene.cup)
+        self.arm_qpos = np.array([self.model.jnt_qposadr[self.model.joint(j).id] for j in RIGHT_ARM_JOINTS])
+        self.arm_dof = np.array([self.model.jnt_dofadr[self.model.joint(j).id] for j in RIGHT_ARM_JOINTS])
+        self.arm_act = np.array([self.model.actuator(j).id for j in RIGHT_ARM_JOINTS])
+        self.speed = np.array([JOINT_SPEED_LIMITS[j] for j in RIGHT_ARM_JOINTS]) * config.speed_scale
+        self.object = self.model.body(scene.object_body).id
+        self.object_qpos = self.model.jnt_qposadr[self.model.body_jntadr[self.object]]
+        self.tip = self.model.site(scene.cup.tip_site).id
+        self.robot_geoms = self._robot_geoms()
+        self.trajectory: list[np.ndarray] = []
+
+    # -- set-up ---------------------------------------------------------------------------------
+    def _robot_geoms(self) -> np.ndarray:
+        """Geoms of the arm links (not the cup), for collision checks."""
+        names = [mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_GEOM, g) or "" for g in range(self.model.ngeom)]
+        return np.array([g for g, n in enumerate(names) if n.startswith("yumi_")])
+
+    def reset(self, rng: np.random.Generator, *, stable_pose: np.ndarray | None = None) -> None:
+        """Home the arm and place the object: dropped from a random orientation (default, the
+        paper's "shaken in a box") or at the given stable-pose transform; then let it settle."""
+        mujoco.mj_resetData(self.model, self.data)
+        self.data.qpos[:] = self.scene.home_qpos
+        self.data.ctrl[:] = self.scene.home_ctrl
+        self.cup.commanded = False
+        self.cup.sealed = -1
+        self.trajectory = []
+        cx, cy = self.scene.config.workspace_centre
+        if stable_pose is None:
+            quat = _random_quat(rng)
+            spread = self.config.drop_spread
+            pos = [cx + rng.uniform(-spread, spread), cy + rng.uniform(-spread, spread), self.config.drop_height]
+        else:
+            quat = np.zeros(4)
+            mujoco.mju_mat2Quat(quat, np.asarray(stable_pose)[:3, :3].ravel())
+            pos = np.asarray(stable_pose)[:3, 3] + [cx, cy, 0.0005]
+        self.data.qpos[self.object_qpos : self.object_qpos + 3] = pos
+        self.data.qpos[self.object_qpos + 3 : self.object_qpos + 7] = quat
+        self.data.qvel[:] = 0.0
+        mujoco.mj_forward(self.model, self.data)
+        q_hold = self.data.qpos[self.arm_qpos].copy()
+        steps = int(self.config.settle_time / self.model.opt.timestep)
+        for k in range(steps):
+            self._step(q_hold)
+            if k > 100 and np.linalg.norm(self.data.qvel[self._object_dofs()]) < 1e-3:
+                break
+
+    def _object_dofs(self) -> slice:
+        adr = self.model.jnt_dofadr[self.model.body_jntadr[self.object]]
+        return slice(adr, adr + 6)
+
+    # -- stepping -------------------------------------------------------------------------------
+    def _step(self, q_target: np.ndarray) -> int:
+        self.data.ctrl[self.arm_act] = q_target
+        sealed = self.cup.update(self.data)
+        mujoco.mj_step(self.model, self.data)
+        self._check_health()
+        self.trajectory.append(self.data.qpos[self.arm_qpos].copy())
+        return sealed
+
+    def _check_health(self) -> None:
+        d, c = self.data, self.config
+        if not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))):
+            raise _Unstable("non-finite state")
+        if np.abs(d.cvel[:, 3:]).max() > c.max_speed:
+            raise _Unstable("body speed beyond limit")
+        if d.ncon and d.contact.dist[: d.ncon].min() < -c.max_penetration:
+            raise _Unstable("deep interpenetration")
+
+    def _run(self, waypoints: np.ndarray, duration: float, watch=None) -> None:
+        """Follow joint waypoints (K, 7) over `duration` with min-jerk timing along them."""
+        steps = max(1, int(round(duration / self.model.opt.timestep)))
+        s = np.linspace(0.0, 1.0, steps + 1)[1:]
+        s = 10 * s**3 - 15 * s**4 + 6 * s**5
+        grid = np.linspace(0.0, 1.0, len(waypoints))
+        for u in s:
+            q = np.array([np.interp(u, grid, waypoints[:, j]) for j in range(waypoints.shape[1])])
+            sealed = self._step(q)
+            if watch is not None and watch(sealed):
+                return
+
+    def _duration(self, waypoints: np.ndarray, minimum: float) -> float:
+        """Shortest min-jerk duration keeping every joint under its scaled speed limit.
+
+        Peak speed of a min-jerk profile is 1.875 x the mean speed.
+        """
+        travel = np.abs(np.diff(waypoints, axis=0)).sum(axis=0)
+        return max(minimum, float(np.max(1.875 * travel / self.speed)))
+
+    def _ik(self, tip_pos: np.ndarray, axis: np.ndarray, q_seed: np.ndarray) -> np.ndarray:
+        result = solve_ik(
+            self.model, self.data_ik, self.scene.cup.tip_site, RIGHT_ARM_JOINTS, tip_pos, axis, q_seed,
+            axis_only=True, rest=np.asarray(HOME_RIGHT),
+        )
+        if not result.success:
+            raise _Failure("unreachable")
+        return result.q
+
+    def _line(self, start: np.ndarray, end: np.ndarray, axis: np.ndarray, q_seed: np.ndarray, step=0.005):
+        """Joint waypoints for a straight tool-tip line from start to end."""
+        n = max(2, int(np.ceil(np.linalg.norm(end - start) / step)) + 1)
+        qs, q = [], q_seed
+        for u in np.linspace(0.0, 1.0, n):
+            q = self._ik(start + u * (end - start), axis, q)
+            qs.append(q)
+        return np.array(qs)
+
+    # -- the pick -------------------------------------------------------------------------------
+    def execute(self, point: np.ndarray, approach: np.ndarray) -> EpisodeResult:
+        """Pick at world `point` along unit world `approach` (pointing into the object)."""
+        c, m, d = self.config, self.model, self.data
+        self.data_ik = mujoco.MjData(m)
+        start_wall, start_sim = time.perf_counter(), d.time
+        phases: dict[str, float] = {}
+        seal_time, peak_slip, lifted, in_bin = None, 0.0, False, False
+        failure, valid, detail = None, True, None
+        point, approach = np.asarray(point, float), np.asarray(approach, float) / np.linalg.norm(approach)
+        try:
+            q0 = d.qpos[self.arm_qpos].copy()
+            pre = point - c.pregrasp_offset * approach
+            q_pre = self._ik(pre, approach, q0)
+            path_in = self._line(pre, point + c.press_depth * approach, approach, q_pre)
+            lift_end = point + np.array([0.0, 0.0, c.lift_height])
+            bx, by = self.scene.config.bin_centre
+            above_bin = np.array([bx, by, c.transport_height])
+
+            self._run(np.array([q0, q_pre]), self._duration(np.array([q0, q_pre]), 0.5))
+            phases["pregrasp"] = d.time - start_sim
+            self._check_robot_collision()
+            self._run(path_in, c.pregrasp_offset / c.approach_speed,
+                      watch=lambda _s: self.cup.compression(d) >= c.compression_stop)
+            self._check_robot_collision()
+            q_contact = d.qpos[self.arm_qpos].copy()
+            self.cup.commanded = True
+            self._run(np.array([q_contact, q_contact]), c.vacuum_dwell)
+            if self.cup.sealed < 0 or self.cup.sealed != self.object:
+                raise _Failure("no_seal")
+            seal_time = d.time - start_sim
+            grip = self._object_in_tip_frame()
+
+            tip_now = d.site_xpos[self.tip].copy()
+            path_up = self._line(tip_now, tip_now + (lift_end - point), approach, q_contact)
+            lost = self._follow_holding(path_up, c.lift_height / c.lift_speed, grip)
+            peak_slip = max(peak_slip, lost[1])
+            if lost[0]:
+                raise _Failure("seal_lost_lift")
+            lifted = bool(self._object_lowest_z() > c.clearance)
+            if not lifted:
+                raise _Failure("not_lifted")
+
+            q_up = d.qpos[self.arm_qpos].copy()
+            q_bin = self._ik(above_bin, np.array([0.0, 0.0, -1.0]), q_up)
+            transport = np.array([q_up, q_bin])
+            lost = self._follow_holding(transport, self._duration(transport, 0.8), grip)
+            peak_slip = max(peak_slip, lost[1])
+            if lost[0]:
+                raise _Failure("seal_lost_transport")
+            lost = self._follow_holding(np.array([q_bin, q_bin]), c.hold_time, grip)
+            peak_slip = max(peak_slip, lost[1])
+            if lost[0]:
+                raise _Failure("seal_lost_hold")
+            in_bin = bool(self._over_bin())
+            phases["held"] = d.time - start_sim
+            self.cup.commanded = False
+            self._run(np.array([q_bin, q_bin]), c.release_time)
+        except _Failure as exc:
+            failure = str(exc)
+        except _Unstable as exc:
+            failure, valid, detail = "unstable", False, str(exc)
+        success = bool(valid and failure is None and lifted and in_bin)
+        return EpisodeResult(
+            success=success, failure=failure, valid=valid, seal_time=seal_time, peak_slip=peak_slip,
+            lifted=lifted, in_bin=in_bin, sim_time=d.time - start_sim,
+            wall_time=time.perf_counter() - start_wall, detail=detail, phases=phases,
+        )
+
+    # -- observations of the state ----------------------------------------------------------------
+    def _object_in_tip_frame(self) -> np.ndarray:
+        """Object COM position in the tool-tip frame (for slip measurement)."""
+        d = self.data
+        rot = d.site_xmat[self.tip].reshape(3, 3)
+        return rot.T @ (d.xipos[self.object] - d.site_xpos[self.tip])
+
+    def _follow_holding(self, waypoints: np.ndarray, duration: float, grip: np.ndarray) -> tuple[bool, float]:
+        """Follow waypoints with the object held; returns (seal lost, peak slip of the object
+        relative to the cup)."""
+        peak = [0.0]
+
+        def watch(sealed: int) -> bool:
+            peak[0] = max(peak[0], float(np.linalg.norm(self._object_in_tip_frame() - grip)))
+            return sealed != self.object
+
+        self._run(waypoints, max(duration, 0.2), watch=watch)
+        return self.cup.sealed != self.object, peak[0]
+
+    def _object_lowest_z(self) -> float:
+        """Lowest point of the object's surface mesh (world z)."""
+        m, d = self.model, self.data
+        g = m.geom(f"{self.scene.object_body}_visual").id
+        mesh = m.geom_dataid[g]
+        verts = m.mesh_vert[m.mesh_vertadr[mesh] : m.mesh_vertadr[mesh] + m.mesh_vertnum[mesh]]
+        return float((d.geom_xpos[g][2] + verts @ d.geom_xmat[g].reshape(3, 3)[2]).min())
+
+    def _over_bin(self) -> bool:
+        (bx, by), (w, dd, _) = self.scene.config.bin_centre, self.scene.config.bin_size
+        x, y = self.data.xipos[self.object][:2]
+        return abs(x - bx) < w / 2 and abs(y - by) < dd / 2
+
+    def _check_robot_collision(self) -> None:
+        """Arm links touching the table, the bin or the object end the episode."""
+        d = self.data
+        for con in d.contact[: d.ncon]:
+            if con.dist < 0 and (con.geom1 in self.robot_geoms or con.geom2 in self.robot_geoms):
+                raise _Failure("collision")
+
+
+def _random_quat(rng: np.random.Generator) -> np.ndarray:
+    """Uniformly random unit quaternion (Shoemake)."""
+    u1, u2, u3 = rng.random(3)
+    return np.array([
+        np.sqrt(1 - u1) * np.sin(2 * np.pi * u2), np.sqrt(1 - u1) * np.cos(2 * np.pi * u2),
+        np.sqrt(u1) * np.sin(2 * np.pi * u3), np.sqrt(u1) * np.cos(2 * np.pi * u3),
+    ])

@@ -106,3 +106,45 @@ def _time_fast_vs_reference(
         f"{tag}_label_agreement": float((fast_rwr[ref] == ref_rwr).mean()),
         f"{tag}_rwr_mean": round(float(fast_rwr.mean()), 4),
     }
+
+
+def bench_episode(*, object_key: str, episodes: int, cores: int, seed: int) -> dict[str, Any]:
+    """Full pick episodes per second (observation rendering included), the simulated-time / wall-
+    time ratio, and render time per depth frame; the reference is real time (ratio 1)."""
+    from suctionbench.sensing.camera import DepthRenderer
+    from suctionbench.sim.pick import PickRequest, PickRunner
+
+    if episodes < 1:
+        raise InputError(f"--episodes {episodes}: must be at least 1")
+    used_cores = _limit_cores(cores)
+    start = time.perf_counter()
+    runner = PickRunner(PickRequest(object_key, seed=seed))
+    build_s = time.perf_counter() - start
+    renderer = DepthRenderer(runner.scene.model, runner.intrinsics)
+    try:
+        walls, sims, renders, successes = [], [], [], 0
+        for k in range(episodes):
+            runner.request.seed = seed + k
+            wall = time.perf_counter()
+            runner.episode.reset(np.random.default_rng((seed + k, 0)))
+            t = time.perf_counter()
+            renderer.render(runner.episode.data, runner.scene.camera)
+            renders.append(time.perf_counter() - t)
+            result = runner.run_after_reset()
+            walls.append(time.perf_counter() - wall)
+            sims.append(result["sim_time"] + result.get("placement_time", 0.0))
+            successes += bool(result["success"])
+    finally:
+        renderer.close()
+    return {
+        "object": object_key,
+        "cores": used_cores,
+        "episodes": episodes,
+        "scene_build_s": round(build_s, 3),
+        "episode_wall_s_mean": round(float(np.mean(walls)), 4),
+        "episode_wall_s_max": round(float(np.max(walls)), 4),
+        "episodes_per_s": round(1.0 / float(np.mean(walls)), 2),
+        "sim_to_wall_ratio": round(float(np.sum(sims) / np.sum(walls)), 2),
+        "render_ms_per_frame": round(1e3 * float(np.median(renders)), 2),
+        "success_rate": round(successes / episodes, 3),
+    }

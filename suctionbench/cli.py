@@ -254,6 +254,68 @@ def _print_batch(labels: Any, summary: dict[str, Any], top: int, mesh: str) -> N
     console.print(best)
 
 
+@app.command()
+def pick(
+    object_key: Annotated[str, typer.Option("--object", help="Object SET/NAME, e.g. basic/box_tea.")],
+    grasp: Annotated[
+        str | None, typer.Option(help="Grasp 'x,y,z,vx,vy,vz' in the object's own frame (default: --policy).")
+    ] = None,
+    policy: Annotated[str, typer.Option(help="Policy choosing the grasp when no --grasp: analytic.")] = "analytic",
+    placement: Annotated[str, typer.Option(help="drop (random orientation) or stable (most probable pose).")] = "drop",
+    cup: Annotated[str, typer.Option(help="Cup preset: default or paper.")] = "default",
+    camera: Annotated[str, typer.Option(help="Camera preset or intrinsics TOML.")] = "primesense",
+    render: Annotated[Path | None, typer.Option(help="Save the overhead colour view before the pick (PNG).")] = None,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Run one simulated pick episode with the YuMi and report its outcome."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.config import cup_preset
+        from suctionbench.sim.pick import PickRequest, PickRunner
+
+        values = None
+        if grasp is not None:
+            values = parse_vector(grasp, 6, "--grasp")
+            if abs(np.linalg.norm(values[3:]) - 1.0) > 1e-3:
+                raise InputError(f"--grasp approach {values[3:].tolist()}: must be a unit vector")
+        request = PickRequest(
+            object_key, seed=seed, grasp=values, policy=policy, placement=placement, cup=cup_preset(cup),
+            camera=camera,
+        )
+        result = PickRunner(request).run(render=render)
+        if not as_json:
+            table = Table(title=f"pick {object_key}", show_header=False)
+            for key, value in result.items():
+                table.add_row(key, f"{value:.4g}" if isinstance(value, float) else str(value))
+            Console().print(table)
+        return result
+
+    _run(as_json, body)
+
+
+@app.command()
+def view(
+    object_key: Annotated[str, typer.Option("--object", help="Object SET/NAME.")] = "basic/box_tea",
+    seed: SeedOpt = 0,
+) -> None:
+    """Open the scene in MuJoCo's interactive viewer (needs a display)."""
+
+    def body() -> dict[str, Any]:
+        if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
+            raise InputError("view: no display found (set DISPLAY); use `pick --render FILE.png` on a server")
+        import mujoco.viewer
+
+        from suctionbench.sim.pick import PickRequest, PickRunner
+
+        runner = PickRunner(PickRequest(object_key, seed=seed))
+        runner.episode.reset(np.random.default_rng(seed))
+        mujoco.viewer.launch(runner.scene.model, runner.episode.data)
+        return {}
+
+    _run(False, body)
+
+
 @bench_app.command("label")
 def bench_label(
     mesh: Annotated[str | None, typer.Option(help="Mesh to label (default: the shipped ~10k-face soap bar).")] = None,
@@ -462,6 +524,30 @@ def objects_generate(
         if not as_json:
             _print_rows("corpus", [{k: v for k, v in summary.items() if not isinstance(v, dict)}])
         return summary
+
+    _run(as_json, body)
+
+
+@bench_app.command("episode")
+def bench_episode_cmd(
+    object_key: Annotated[str, typer.Option("--object", help="Object SET/NAME.")] = "basic/box_tea",
+    episodes: Annotated[int, typer.Option(help="Episodes to run (drop placement, analytic policy).")] = 10,
+    cores: Annotated[int, typer.Option(help="CPU cores the process may use (0 = all).")] = 1,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Pick episodes per second (rendering the observation included), sim/wall time, render time."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.bench import bench_episode
+
+        result = bench_episode(object_key=object_key, episodes=episodes, cores=cores, seed=seed)
+        if not as_json:
+            table = Table(title="bench episode", show_header=False)
+            for key, value in result.items():
+                table.add_row(key, str(value))
+            Console().print(table)
+        return result
 
     _run(as_json, body)
 

@@ -46,7 +46,8 @@ MAX_STABLE_POSES = 10
 """Stable poses kept per object (most probable first)."""
 
 MIN_POSE_PROBABILITY = 0.005
-"""Stable poses less probable than this are dropped."""
+"""Stable poses less probable than this are dropped (the most probable one is always kept: a
+sphere has a continuum of equally improbable poses)."""
 
 COVERAGE_MIN = 0.95
 """The union of the convex parts must cover at least this fraction of the object's volume."""
@@ -143,7 +144,7 @@ def stable_poses(mesh: trimesh.Trimesh, com: np.ndarray) -> list[dict[str, Any]]
     """Quasi-static stable resting poses (Goldberg et al.) with probabilities, most probable first."""
     transforms, probs = trimesh.poses.compute_stable_poses(mesh, center_mass=com, sigma=0.0, n_samples=1)
     order = np.argsort(-probs)
-    kept = [i for i in order if probs[i] >= MIN_POSE_PROBABILITY][:MAX_STABLE_POSES]
+    kept = [i for i in order if probs[i] >= MIN_POSE_PROBABILITY][:MAX_STABLE_POSES] or [order[0]]
     return [
         {"probability": round(float(probs[i]), 6), "transform": np.round(transforms[i], 9).tolist()}
         for i in kept

@@ -45,8 +45,13 @@ class EpisodeConfig:
     settle_time: float = 1.5
     """Longest time given to a dropped object to come to rest."""
 
-    drop_height: float = 0.12
-    """Height of the object's centre above the table when dropped."""
+    ready_tip: tuple[float, float, float] = (0.12, -0.42, 0.30)
+    """Where the tool tip waits (pointing down) while the object settles and is observed: out of
+    the overhead camera's view, as on the real system."""
+
+    drop_clearance: float = 0.03
+    """A dropped object starts this high above the table at its lowest possible point (its
+    bounding sphere about the body origin), whatever its random orientation."""
 
     drop_spread: float = 0.04
     """Half-width of the square around the workspace centre where objects are dropped."""
@@ -153,6 +158,7 @@ class PickEpisode:
         mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[:] = self.scene.home_qpos
         self.data.ctrl[:] = self.scene.home_ctrl
+        self.data.qpos[self.arm_qpos] = self._ready_configuration()
         self.cup.commanded = False
         self.cup.sealed = -1
         self.trajectory = []
@@ -160,7 +166,8 @@ class PickEpisode:
         if stable_pose is None:
             quat = _random_quat(rng)
             spread = self.config.drop_spread
-            pos = [cx + rng.uniform(-spread, spread), cy + rng.uniform(-spread, spread), self.config.drop_height]
+            height = self._object_radius() + self.config.drop_clearance
+            pos = [cx + rng.uniform(-spread, spread), cy + rng.uniform(-spread, spread), height]
         else:
             quat = np.zeros(4)
             mujoco.mju_mat2Quat(quat, np.asarray(stable_pose)[:3, :3].ravel())
@@ -171,10 +178,29 @@ class PickEpisode:
         mujoco.mj_forward(self.model, self.data)
         q_hold = self.data.qpos[self.arm_qpos].copy()
         steps = int(self.config.settle_time / self.model.opt.timestep)
-        for k in range(steps):
-            self._step(q_hold)
-            if k > 100 and np.linalg.norm(self.data.qvel[self._object_dofs()]) < 1e-3:
-                break
+        self.placement_error = None
+        try:
+            for k in range(steps):
+                self._step(q_hold)
+                if k > 100 and np.linalg.norm(self.data.qvel[self._object_dofs()]) < 1e-3:
+                    break
+        except _Unstable as exc:
+            self.placement_error = f"during placement: {exc}"
+
+    def _object_radius(self) -> float:
+        """Radius of a sphere about the object's body origin that contains its surface mesh."""
+        m = self.model
+        g = m.geom(f"{self.scene.object_body}_visual").id
+        return float(np.linalg.norm(m.geom_pos[g]) + m.geom_rbound[g])
+
+    def _ready_configuration(self) -> np.ndarray:
+        """Arm configuration with the tool tip at `ready_tip`, pointing down (cached)."""
+        if getattr(self, "_ready", None) is None:
+            self.data_ik = mujoco.MjData(self.model)
+            self.data_ik.qpos[:] = self.scene.home_qpos
+            home = self.scene.home_qpos[self.arm_qpos]
+            self._ready = self._ik(np.asarray(self.config.ready_tip), np.array([0.0, 0.0, -1.0]), home)
+        return self._ready
 
     def _object_dofs(self) -> slice:
         adr = self.model.jnt_dofadr[self.model.body_jntadr[self.object]]
@@ -247,6 +273,8 @@ class PickEpisode:
         failure, valid, detail = None, True, None
         point, approach = np.asarray(point, float), np.asarray(approach, float) / np.linalg.norm(approach)
         try:
+            if self.placement_error:
+                raise _Unstable(self.placement_error)
             q0 = d.qpos[self.arm_qpos].copy()
             pre = point - c.pregrasp_offset * approach
             q_pre = self._ik(pre, approach, q0)

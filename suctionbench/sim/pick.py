@@ -14,6 +14,7 @@ import numpy as np
 from suctionbench.config import CUP_DEFAULT, CupConfig, LabelConfig
 from suctionbench.contact import SuctionLabeller
 from suctionbench.errors import InputError
+from suctionbench.objects.build import ObjectRecord
 from suctionbench.objects.registry import load_object
 from suctionbench.sensing.camera import CameraPoseConfig, camera_preset, sample_camera_pose
 from suctionbench.sim.episode import EpisodeConfig, PickEpisode
@@ -51,6 +52,9 @@ class PickRequest:
     episode: EpisodeConfig = field(default_factory=EpisodeConfig)
     """Timing and geometry of the pick."""
 
+    record: ObjectRecord | None = None
+    """An object record to use instead of looking up `object_key` (e.g. a freshly built one)."""
+
 
 class PickRunner:
     """Builds the scene once per object and runs seeded episodes in it."""
@@ -59,7 +63,7 @@ class PickRunner:
         if request.placement not in PLACEMENTS:
             raise InputError(f"--placement '{request.placement}': expected one of {', '.join(PLACEMENTS)}")
         self.request = request
-        self.record = load_object(request.object_key)
+        self.record = request.record or load_object(request.object_key)
         self.intrinsics = camera_preset(request.camera)
         rng = np.random.default_rng((request.seed, 1))
         centre = np.array([*SceneConfig().workspace_centre, 0.0])
@@ -77,10 +81,19 @@ class PickRunner:
 
     def run(self, render: Path | None = None) -> dict[str, Any]:
         """Place, choose, execute; returns a JSON-ready record of the episode."""
+        self.reset()
+        return self.run_after_reset(render)
+
+    def reset(self) -> None:
+        """Place the object (seeded) and let it settle, the arm out of the camera's view."""
         req = self.request
-        rng = np.random.default_rng((req.seed, 0))
         stable = self.record.most_probable_pose() if req.placement == "stable" else None
-        self.episode.reset(rng, stable_pose=stable)
+        self.episode.reset(np.random.default_rng((req.seed, 0)), stable_pose=stable)
+
+    def run_after_reset(self, render: Path | None = None) -> dict[str, Any]:
+        """Choose the grasp in the settled scene and execute it."""
+        req = self.request
+        placement_time = float(self.episode.data.time)
         pose = self.object_pose()
         mesh = self.record.mesh()
         mesh.apply_transform(pose)
@@ -110,6 +123,7 @@ class PickRunner:
             "label_seal": bool(labels.seal.seal[0]),
             "label_wr": bool(labels.wr[0]),
             "label_rwr": float(labels.rwr[0]),
+            "placement_time": placement_time,
             **result.to_dict(),
         }
 

@@ -552,6 +552,30 @@ def bench_episode_cmd(
     _run(as_json, body)
 
 
+@bench_app.command("agreement")
+def bench_agreement_cmd(
+    set_name: Annotated[str, typer.Option("--set", help="Object set.")] = "basic",
+    trials: Annotated[int, typer.Option(help="Episodes (random reachable surface grasps).")] = 200,
+    threshold: Annotated[float, typer.Option(help="Analytic rwr above which success is predicted.")] = 0.5,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Analytic robust label vs simulated lift on random grasps: confusion matrix (report, never tune)."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.bench import bench_agreement
+
+        result = bench_agreement(set_name=set_name, trials=trials, seed=seed, threshold=threshold)
+        if not as_json:
+            table = Table(title=f"analytic rwr > {threshold} vs simulated success ({set_name})", show_header=False)
+            for key, value in result.items():
+                table.add_row(key, str(value))
+            Console().print(table)
+        return result
+
+    _run(as_json, body)
+
+
 def main() -> None:
     """Console-script entry point."""
     app()

@@ -28,6 +28,25 @@ class RankedGrasp:
     candidates: int
 
 
+def surface_candidates(
+    mesh_world: trimesh.Trimesh, count: int, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """Up to `count` uniform surface grasps whose approach the arm can take (from above)."""
+    points, approaches = sample_surface_grasps(mesh_world, 4 * count, rng)
+    downward = approaches[:, 2] <= -np.cos(MAX_APPROACH_FROM_VERTICAL)
+    if not downward.any():
+        raise InputError("no surface of the object faces the gripper")
+    return points[downward][:count], approaches[downward][:count]
+
+
+def random_surface_grasp(mesh_world: trimesh.Trimesh, seed: int) -> RankedGrasp:
+    """One grasp drawn uniformly among reachable surface grasps (known shape, no ranking)."""
+    rng = np.random.default_rng(seed)
+    points, approaches = surface_candidates(mesh_world, 64, rng)
+    pick = int(rng.integers(len(points)))
+    return RankedGrasp(points[pick], approaches[pick], float("nan"), len(points))
+
+
 def analytic_grasp(
     mesh_world: trimesh.Trimesh,
     com_world: np.ndarray,
@@ -40,12 +59,7 @@ def analytic_grasp(
 ) -> RankedGrasp:
     """Sample surface grasps on the object in its world pose and return the best by `metric`."""
     labeller = SuctionLabeller(mesh_world, LabelConfig(cup=cup), mass=mass, com=com_world)
-    rng = np.random.default_rng(seed)
-    points, approaches = sample_surface_grasps(mesh_world, 4 * candidates, rng)
-    downward = approaches[:, 2] <= -np.cos(MAX_APPROACH_FROM_VERTICAL)
-    points, approaches = points[downward][:candidates], approaches[downward][:candidates]
-    if len(points) == 0:
-        raise InputError("analytic policy: no surface faces the gripper")
+    points, approaches = surface_candidates(mesh_world, candidates, np.random.default_rng(seed))
     labels = labeller.label(points, approaches, seed, metrics=("ss", "wr", metric))
     score = labels.score(metric)
     best = int(np.lexsort((labels.score("ss"), score))[-1])

@@ -145,6 +145,7 @@ class PickEpisode:
         self.tip = self.model.site(scene.cup.tip_site).id
         self.robot_geoms = self._robot_geoms()
         self.trajectory: list[np.ndarray] = []
+        self.watch_collisions = False
 
     # -- set-up ---------------------------------------------------------------------------------
     def _robot_geoms(self) -> np.ndarray:
@@ -154,7 +155,8 @@ class PickEpisode:
 
     def reset(self, rng: np.random.Generator, *, stable_pose: np.ndarray | None = None) -> None:
         """Home the arm and place the object: dropped from a random orientation (default, the
-        paper's "shaken in a box") or at the given stable-pose transform; then let it settle."""
+        paper's "shaken in a box") or in the given stable pose with a random planar pose; then let
+        it settle."""
         mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[:] = self.scene.home_qpos
         self.data.ctrl[:] = self.scene.home_ctrl
@@ -162,16 +164,22 @@ class PickEpisode:
         self.cup.commanded = False
         self.cup.sealed = -1
         self.trajectory = []
+        self.watch_collisions = False
         cx, cy = self.scene.config.workspace_centre
         if stable_pose is None:
             quat = _random_quat(rng)
             spread = self.config.drop_spread
             height = self._object_radius() + self.config.drop_clearance
             pos = [cx + rng.uniform(-spread, spread), cy + rng.uniform(-spread, spread), height]
-        else:
+        else:  # the stable pose, then a random planar pose (x, y, yaw) as in the paper's model
+            yaw = rng.uniform(0.0, 2.0 * np.pi)
+            spin = np.array([[np.cos(yaw), -np.sin(yaw), 0.0], [np.sin(yaw), np.cos(yaw), 0.0], [0.0, 0.0, 1.0]])
+            pose = np.asarray(stable_pose)
             quat = np.zeros(4)
-            mujoco.mju_mat2Quat(quat, np.asarray(stable_pose)[:3, :3].ravel())
-            pos = np.asarray(stable_pose)[:3, 3] + [cx, cy, 0.0005]
+            mujoco.mju_mat2Quat(quat, (spin @ pose[:3, :3]).ravel())
+            spread = self.config.drop_spread
+            offset = [cx + rng.uniform(-spread, spread), cy + rng.uniform(-spread, spread), 0.0005]
+            pos = spin @ pose[:3, 3] + offset
         self.data.qpos[self.object_qpos : self.object_qpos + 3] = pos
         self.data.qpos[self.object_qpos + 3 : self.object_qpos + 7] = quat
         self.data.qvel[:] = 0.0
@@ -212,6 +220,8 @@ class PickEpisode:
         sealed = self.cup.update(self.data)
         mujoco.mj_step(self.model, self.data)
         self._check_health()
+        if self.watch_collisions:
+            self._check_robot_collision()
         self.trajectory.append(self.data.qpos[self.arm_qpos].copy())
         return sealed
 
@@ -283,12 +293,12 @@ class PickEpisode:
             bx, by = self.scene.config.bin_centre
             above_bin = np.array([bx, by, c.transport_height])
 
+            self.watch_collisions = True  # the arm must not touch anything on the way in
             self._run(np.array([q0, q_pre]), self._duration(np.array([q0, q_pre]), 0.5))
             phases["pregrasp"] = d.time - start_sim
-            self._check_robot_collision()
             self._run(path_in, c.pregrasp_offset / c.approach_speed,
                       watch=lambda _s: self.cup.compression(d) >= c.compression_stop)
-            self._check_robot_collision()
+            self.watch_collisions = False
             q_contact = d.qpos[self.arm_qpos].copy()
             self.cup.commanded = True
             self._run(np.array([q_contact, q_contact]), c.vacuum_dwell)

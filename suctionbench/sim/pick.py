@@ -16,9 +16,12 @@ from suctionbench.contact import SuctionLabeller
 from suctionbench.errors import InputError
 from suctionbench.objects.build import ObjectRecord
 from suctionbench.objects.registry import load_object
-from suctionbench.sensing.camera import CameraPoseConfig, camera_preset, sample_camera_pose
+from suctionbench.sensing.camera import CameraPoseConfig, resolve_camera, sample_camera_pose
 from suctionbench.sim.episode import EpisodeConfig, PickEpisode
 from suctionbench.sim.scene import SceneConfig, build_scene
+
+KNOWN_STATE_POLICIES = ("analytic", "random-surface")
+"""Policies that see the true object state: rank surface grasps by RWR, or draw one uniformly."""
 
 PLACEMENTS = ("drop", "stable")
 """How the object is placed: dropped from a random orientation, or in its most probable stable pose."""
@@ -64,10 +67,10 @@ class PickRunner:
             raise InputError(f"--placement '{request.placement}': expected one of {', '.join(PLACEMENTS)}")
         self.request = request
         self.record = request.record or load_object(request.object_key)
-        self.intrinsics = camera_preset(request.camera)
+        self.intrinsics = resolve_camera(request.camera)
         rng = np.random.default_rng((request.seed, 1))
         centre = np.array([*SceneConfig().workspace_centre, 0.0])
-        self.camera_pose = sample_camera_pose(rng, centre, CameraPoseConfig())
+        self.camera_pose = sample_camera_pose(rng, centre, CameraPoseConfig().for_camera(self.intrinsics))
         self.scene = build_scene(self.record, request.cup, self.intrinsics, self.camera_pose)
         self.episode = PickEpisode(self.scene, request.episode)
 
@@ -102,13 +105,18 @@ class PickRunner:
             point = pose[:3, :3] @ req.grasp[:3] + pose[:3, 3]
             approach = pose[:3, :3] @ (req.grasp[3:] / np.linalg.norm(req.grasp[3:]))
             q = None
-        elif req.policy == "analytic":
-            from suctionbench.policies.analytic import analytic_grasp
+        elif req.policy in KNOWN_STATE_POLICIES:
+            from suctionbench.policies.analytic import analytic_grasp, random_surface_grasp
 
-            chosen = analytic_grasp(mesh, com, self.record.mass, req.cup, req.seed)
-            point, approach, q = chosen.point, chosen.approach, chosen.score
+            if req.policy == "analytic":
+                chosen = analytic_grasp(mesh, com, self.record.mass, req.cup, req.seed)
+            else:
+                chosen = random_surface_grasp(mesh, req.seed)
+            point, approach = chosen.point, chosen.approach
+            q = None if np.isnan(chosen.score) else chosen.score
         else:
-            raise InputError(f"--policy '{req.policy}' is unknown here (available: analytic)")
+            known = ", ".join(KNOWN_STATE_POLICIES)
+            raise InputError(f"--policy '{req.policy}' is unknown here (available: {known})")
         labeller = SuctionLabeller(mesh, LabelConfig(cup=req.cup), mass=self.record.mass, com=com)
         labels = labeller.label(point[None], approach[None], req.seed, metrics=("wr", "rwr"))
         if render is not None:

@@ -166,6 +166,7 @@ def bench_agreement(*, set_name: str, trials: int, seed: int, threshold: float =
     counts = Counter()
     failures: Counter[str] = Counter()
     invalid = 0
+    rows = []
     for i in range(trials):
         record = records[i % len(records)]
         if record.key not in runners:
@@ -177,6 +178,8 @@ def bench_agreement(*, set_name: str, trials: int, seed: int, threshold: float =
             invalid += 1
             continue
         predicted, actual = result["label_rwr"] > threshold, bool(result["success"])
+        rows.append({"object": record.key, "seed": seed + i, "rwr": result["label_rwr"],
+                     "label_seal": result["label_seal"], "success": actual, "failure": result["failure"]})
         counts[(predicted, actual)] += 1
         failures[result["failure"] or "success"] += 1
     tp, fp = counts[(True, True)], counts[(True, False)]
@@ -194,4 +197,5 @@ def bench_agreement(*, set_name: str, trials: int, seed: int, threshold: float =
         "recall": round(tp / (tp + fn), 4) if tp + fn else None,
         "sim_success_rate": round((tp + fn) / valid, 4) if valid else None,
         "outcomes": dict(sorted(failures.items())),
+        "per_trial": rows,
     }

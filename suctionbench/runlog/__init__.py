@@ -1,0 +1,40 @@
+"""Run logs: one MCAP file per pick episode, viewable in Foxglove and readable back in pure Python.
+
+Why MCAP + JSON, written with the plain `mcap` package
+-----------------------------------------------------
+Every channel is ``message_encoding="json"`` with a ``jsonschema`` schema. Where a Foxglove
+well-known schema exists (``foxglove.RawImage``, ``foxglove.CameraCalibration``,
+``foxglove.FrameTransforms``, ``foxglove.SceneUpdate``) the channel carries that schema name and a
+JSON Schema with the same field names as Foxglove's published one, so Foxglove's Image and 3D
+panels render it directly; bytes fields (the depth image) are base64 strings tagged
+``contentEncoding: base64``, which is how Foxglove reads bytes in JSON. Our own records (joint
+states, grasp table, suction state, episode result) are ``suctionbench.*`` JSON schemas.
+
+The alternatives were weighed and rejected:
+
+* ``foxglove-sdk`` writes protobuf through a compiled (Rust) extension with a process-global
+  logging context; its Python schema module was being renamed (``foxglove.schemas`` ->
+  ``foxglove.messages``) at the time of writing, and reading the logs back would need
+  ``protobuf`` + ``mcap-protobuf-support`` to rebuild message classes from embedded descriptors.
+* Protobuf by hand needs the generated Foxglove ``.proto`` classes as a further dependency.
+
+JSON needs no code generation, decodes with ``json.loads`` (so ``reader`` works on any machine
+with only ``mcap`` installed), keeps every float exactly (Python writes the shortest repr that
+round-trips), and is readable with ``mcap cat --json``. The cost is size: base64 adds a third
+to the depth image, which zstd chunk compression (on by default in ``mcap``) largely recovers;
+a 640x480 float32 depth frame plus ~100 state messages is a ~1 MB file.
+
+Times
+-----
+Log time (and publish time) of every message is the episode's *simulated* time in integer
+nanoseconds, so a log replays the episode at the speed of the simulation, independent of how
+fast the host computed it. Message ``timestamp`` fields carry the same time.
+
+Run metadata (config, versions, seed, ...) is an MCAP metadata record named ``suctionbench``
+whose values are JSON text (``mcap`` metadata is string -> string), decoded again by the reader.
+"""
+
+from suctionbench.runlog.reader import depth_image, iter_messages, read_episode, read_run
+from suctionbench.runlog.writer import EpisodeLog
+
+__all__ = ["EpisodeLog", "depth_image", "iter_messages", "read_episode", "read_run"]

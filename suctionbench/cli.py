@@ -265,6 +265,7 @@ def pick(
     cup: Annotated[str, typer.Option(help="Cup preset: default or paper.")] = "default",
     camera: Annotated[str, typer.Option(help="Camera preset or intrinsics TOML.")] = "primesense",
     render: Annotated[Path | None, typer.Option(help="Save the overhead colour view before the pick (PNG).")] = None,
+    log: Annotated[Path | None, typer.Option(help="Write the episode to this MCAP file (Foxglove).")] = None,
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
@@ -283,7 +284,9 @@ def pick(
             object_key, seed=seed, grasp=values, policy=policy, placement=placement, cup=cup_preset(cup),
             camera=camera,
         )
-        result = PickRunner(request).run(render=render)
+        if log is not None and log.suffix != ".mcap":
+            raise InputError(f"--log '{log}': expected a .mcap file name")
+        result = PickRunner(request).run(render=render, log=log)
         if not as_json:
             table = Table(title=f"pick {object_key}", show_header=False)
             for key, value in result.items():

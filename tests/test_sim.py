@@ -160,3 +160,17 @@ def test_sample_objects_produce_valid_episodes(key):
     # The fast-suite share of test_every_object_rests_and_produces_a_valid_episode.
     _, result = pick(key, placement="drop", seed=1)
     assert result["valid"], result
+
+
+def test_pick_writes_a_readable_mcap_log(tmp_path):
+    from suctionbench.runlog.reader import iter_messages, read_episode
+
+    runner = PickRunner(PickRequest("basic/box_tea", placement="stable", seed=2))
+    result = runner.run(log=tmp_path / "episode.mcap")
+    logged = read_episode(tmp_path / "episode.mcap")
+    assert logged["result"]["success"] == result["success"]
+    assert logged["metadata"]["seed"] == 2 and logged["metadata"]["object"] == "basic/box_tea"
+    for topic in ("/camera/depth", "/camera/calibration", "/tf", "/joint_states", "/suction", "/grasps/candidates"):
+        assert logged["topics"].get(topic, 0) >= 1, topic
+    times = [t for t, _ in iter_messages(tmp_path / "episode.mcap", "/suction")]
+    assert times == sorted(times) and times[-1] <= logged["duration"] + times[0] + 1e-6

@@ -20,12 +20,15 @@ over the table, never from below it."""
 
 @dataclass
 class RankedGrasp:
-    """The chosen grasp (world frame) and its metric value."""
+    """The chosen grasp (world frame), its metric value, and the candidates it was chosen from."""
 
     point: np.ndarray
     approach: np.ndarray
     score: float
-    candidates: int
+    candidate_points: np.ndarray
+    candidate_approaches: np.ndarray
+    candidate_scores: np.ndarray | None
+    chosen_index: int
 
 
 def surface_candidates(
@@ -44,7 +47,7 @@ def random_surface_grasp(mesh_world: trimesh.Trimesh, seed: int) -> RankedGrasp:
     rng = np.random.default_rng(seed)
     points, approaches = surface_candidates(mesh_world, 64, rng)
     pick = int(rng.integers(len(points)))
-    return RankedGrasp(points[pick], approaches[pick], float("nan"), len(points))
+    return RankedGrasp(points[pick], approaches[pick], float("nan"), points, approaches, None, pick)
 
 
 def analytic_grasp(
@@ -63,4 +66,4 @@ def analytic_grasp(
     labels = labeller.label(points, approaches, seed, metrics=("ss", "wr", metric))
     score = labels.score(metric)
     best = int(np.lexsort((labels.score("ss"), score))[-1])
-    return RankedGrasp(points[best], approaches[best], float(score[best]), len(points))
+    return RankedGrasp(points[best], approaches[best], float(score[best]), points, approaches, score, best)

@@ -159,3 +159,23 @@ def depth_image(message: dict[str, Any]) -> np.ndarray:
     if step != 4 * width or raw.size != height * width:
         raise InputError(f"depth message: {raw.size * 4} bytes do not match {height}x{width} 32FC1 (step {step})")
     return raw.reshape(height, width).astype(np.float32)
+
+
+def grasp_table(message: dict[str, Any]) -> dict[str, Any]:
+    """Arrays of a /grasps/table message: points (N, 3), approaches (N, 3), q (N,) or None, chosen_index.
+
+    q is None when the candidates were logged without qualities; a non-finite q was logged as
+    null and comes back as NaN.
+    """
+    candidates = message["candidates"]
+
+    def vectors(key: str) -> np.ndarray:
+        return np.array([[c[key][a] for a in "xyz"] for c in candidates], dtype=float).reshape(-1, 3)
+
+    has_q = bool(candidates) and all("q" in c for c in candidates)
+    return {
+        "points": vectors("point"),
+        "approaches": vectors("approach"),
+        "q": np.array([np.nan if c["q"] is None else c["q"] for c in candidates]) if has_q else None,
+        "chosen_index": message.get("chosen_index"),
+    }

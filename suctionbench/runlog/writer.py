@@ -56,7 +56,9 @@ NO_QUALITY_COLOR = {"r": 0.6, "g": 0.6, "b": 0.6, "a": 1.0}
 # --------------------------------------------------------------------------------------------
 # JSON Schemas. Foxglove identifies well-known types by the schema *name*; the JSON Schema body
 # tells it which strings are base64 bytes and gives field names for message-path completion, so
-# we describe exactly the fields we write, with Foxglove's field names.
+# we describe exactly the fields we write, with Foxglove's field names. Foxglove's parser takes
+# only a subset of JSON Schema: one "type" per field, "properties" on every object, no arrays of
+# arrays -- hence points as {x, y, z} objects (tests/test_runlog.py checks every schema).
 # --------------------------------------------------------------------------------------------
 
 
@@ -96,6 +98,10 @@ _SCENE_ENTITY = _obj(
     arrows=_array(_ARROW),
 )
 
+# Optional fields ("q" without qualities, "chosen_index" without a choice) are left out rather
+# than null, because Foxglove's JSON Schema parser accepts only one type per field.
+_GRASP_CANDIDATE = _obj(index=_INT, point=_VEC3, approach=_VEC3, q=_NUM)
+
 SCHEMAS: dict[str, dict] = {
     "foxglove.RawImage": _obj(
         timestamp=_TIME,
@@ -123,23 +129,12 @@ SCHEMAS: dict[str, dict] = {
     ),
     "suctionbench.JointStates": _obj(timestamp=_TIME, names=_array(_STR), positions=_array(_NUM)),
     "suctionbench.GraspTable": _obj(
-        timestamp=_TIME,
-        frame_id=_STR,
-        points=_array(_array(_NUM)),
-        approaches=_array(_array(_NUM)),
-        q={"type": ["array", "null"], "items": {"type": ["number", "null"]}},
-        chosen_index={"type": ["integer", "null"]},
+        timestamp=_TIME, frame_id=_STR, chosen_index=_INT, candidates=_array(_GRASP_CANDIDATE)
     ),
-    "suctionbench.ChosenGrasp": _obj(
-        timestamp=_TIME,
-        frame_id=_STR,
-        index=_INT,
-        point=_array(_NUM),
-        approach=_array(_NUM),
-        q={"type": ["number", "null"]},
-    ),
+    "suctionbench.ChosenGrasp": _obj(timestamp=_TIME, frame_id=_STR, **_GRASP_CANDIDATE["properties"]),
     "suctionbench.Suction": _obj(timestamp=_TIME, vacuum_on=_BOOL, sealed=_BOOL, compression=_NUM),
-    "suctionbench.EpisodeResult": {"type": "object", "description": "The episode's outcome record."},
+    # Free-form record: Foxglove needs "properties" on every object, even an open one.
+    "suctionbench.EpisodeResult": {"type": "object", "properties": {}, "description": "The episode's outcome."},
 }
 
 TOPIC_SCHEMAS: dict[str, str] = {
@@ -406,7 +401,9 @@ class EpisodeLog:
         """Grasp candidates: arrows in the 3D scene, the raw numbers, and the chosen grasp.
 
         Arrows are coloured by q from red (0) to green (1), grey without q; the chosen one is
-        drawn thicker and also published alone on /grasps/chosen.
+        drawn thicker. /grasps/table lists every candidate as ``{index, point: {x, y, z},
+        approach: {x, y, z}, q}`` (q left out when None; ``reader.grasp_table`` turns it back
+        into arrays); /grasps/chosen repeats the chosen candidate's record.
         """
         ns = seconds_to_ns(t)
         points = _as_array("points", points, (None, 3))
@@ -427,31 +424,16 @@ class EpisodeLog:
         # Delete-all first, so a "chosen" arrow from an earlier update does not linger.
         deletions = [{"timestamp": stamp, "type": 1, "id": ""}]
         self._write(TOPIC_GRASP_SCENE, ns, {"deletions": deletions, "entities": entities})
-        self._write(
-            TOPIC_GRASP_TABLE,
-            ns,
-            {
-                "timestamp": stamp,
-                "frame_id": frame_id,
-                "points": points,
-                "approaches": approaches,
-                "q": q,
-                "chosen_index": chosen_index,
-            },
-        )
+        candidates = [
+            {"index": i, "point": _xyz(p), "approach": _xyz(v)} | ({} if q is None else {"q": q[i]})
+            for i, (p, v) in enumerate(zip(points, approaches, strict=True))
+        ]
+        table = {"timestamp": stamp, "frame_id": frame_id, "candidates": candidates}
         if chosen_index is not None:
-            self._write(
-                TOPIC_GRASP_CHOSEN,
-                ns,
-                {
-                    "timestamp": stamp,
-                    "frame_id": frame_id,
-                    "index": chosen_index,
-                    "point": points[chosen_index],
-                    "approach": approaches[chosen_index],
-                    "q": None if q is None else q[chosen_index],
-                },
-            )
+            table["chosen_index"] = chosen_index
+        self._write(TOPIC_GRASP_TABLE, ns, table)
+        if chosen_index is not None:
+            self._write(TOPIC_GRASP_CHOSEN, ns, {"timestamp": stamp, "frame_id": frame_id} | candidates[chosen_index])
 
     def log_suction(self, t: float, vacuum_on: bool, sealed: bool, compression: float) -> None:
         """State of the suction cup: vacuum command, seal test, bellow compression (metres)."""

@@ -146,6 +146,9 @@ class PickEpisode:
         self.robot_geoms = self._robot_geoms()
         self.trajectory: list[np.ndarray] = []
         self.watch_collisions = False
+        self.recorder = None
+        """Optional callable(data, controller) called every `record_every` steps (run logs)."""
+        self.record_every = 10
 
     # -- set-up ---------------------------------------------------------------------------------
     def _robot_geoms(self) -> np.ndarray:
@@ -223,6 +226,8 @@ class PickEpisode:
         if self.watch_collisions:
             self._check_robot_collision()
         self.trajectory.append(self.data.qpos[self.arm_qpos].copy())
+        if self.recorder is not None and len(self.trajectory) % self.record_every == 0:
+            self.recorder(self.data, self.cup)
         return sealed
 
     def _check_health(self) -> None:

@@ -59,6 +59,14 @@ class PickRequest:
     """An object record to use instead of looking up `object_key` (e.g. a freshly built one)."""
 
 
+def _pose(position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+    """4x4 transform from a position and a flat 3x3 rotation."""
+    pose = np.eye(4)
+    pose[:3, :3] = np.asarray(rotation).reshape(3, 3)
+    pose[:3, 3] = position
+    return pose
+
+
 class PickRunner:
     """Builds the scene once per object and runs seeded episodes in it."""
 
@@ -82,10 +90,31 @@ class PickRunner:
         pose[:3, 3] = d.xpos[body]
         return pose
 
-    def run(self, render: Path | None = None) -> dict[str, Any]:
-        """Place, choose, execute; returns a JSON-ready record of the episode."""
-        self.reset()
-        return self.run_after_reset(render)
+    def run(self, render: Path | None = None, log: Path | None = None) -> dict[str, Any]:
+        """Place, choose, execute; returns a JSON-ready record of the episode. With `log`, the
+        episode is also written to that MCAP file (suctionbench.runlog)."""
+        if log is None:
+            self.reset()
+            return self.run_after_reset(render)
+        from suctionbench.runlog.writer import EpisodeLog
+
+        with EpisodeLog(log, self.log_metadata()) as episode_log:
+            self.reset()
+            return self.run_after_reset(render, episode_log)
+
+    def log_metadata(self) -> dict[str, Any]:
+        """Run configuration, versions and seed, for the run log's metadata record."""
+        import mujoco as mj
+
+        from suctionbench import __version__
+        from suctionbench.config import to_dict
+
+        req = self.request
+        return {
+            "suctionbench_version": __version__, "mujoco_version": mj.__version__, "object": req.object_key,
+            "seed": req.seed, "policy": req.policy if req.grasp is None else "given", "placement": req.placement,
+            "cup": to_dict(req.cup), "camera": to_dict(self.intrinsics), "episode": to_dict(req.episode),
+        }
 
     def reset(self) -> None:
         """Place the object (seeded) and let it settle, the arm out of the camera's view."""
@@ -93,14 +122,15 @@ class PickRunner:
         stable = self.record.most_probable_pose() if req.placement == "stable" else None
         self.episode.reset(np.random.default_rng((req.seed, 0)), stable_pose=stable)
 
-    def run_after_reset(self, render: Path | None = None) -> dict[str, Any]:
-        """Choose the grasp in the settled scene and execute it."""
+    def run_after_reset(self, render: Path | None = None, log: Any = None) -> dict[str, Any]:
+        """Choose the grasp in the settled scene and execute it (logging to `log` if given)."""
         req = self.request
         placement_time = float(self.episode.data.time)
         pose = self.object_pose()
         mesh = self.record.mesh()
         mesh.apply_transform(pose)
         com = pose[:3, :3] @ np.asarray(self.record.com) + pose[:3, 3]
+        chosen = None
         if req.grasp is not None:
             point = pose[:3, :3] @ req.grasp[:3] + pose[:3, 3]
             approach = pose[:3, :3] @ (req.grasp[3:] / np.linalg.norm(req.grasp[3:]))
@@ -121,8 +151,11 @@ class PickRunner:
         labels = labeller.label(point[None], approach[None], req.seed, metrics=("wr", "rwr"))
         if render is not None:
             self.render_png(render)
+        if log is not None:
+            self._log_start(log, point, approach, chosen)
         result = self.episode.execute(point, approach)
-        return {
+        self.episode.recorder = None
+        record = {
             "object": req.object_key,
             "seed": req.seed,
             "placement": req.placement,
@@ -134,6 +167,38 @@ class PickRunner:
             "placement_time": placement_time,
             **result.to_dict(),
         }
+        if log is not None:
+            log.log_result(float(self.episode.data.time), record)
+        return record
+
+    def _log_start(self, log: Any, point: np.ndarray, approach: np.ndarray, chosen: Any) -> None:
+        """Observation, candidates and chosen grasp; then state every `record_every` steps."""
+        from suctionbench.sensing.camera import DepthRenderer
+
+        data, t = self.episode.data, float(self.episode.data.time)
+        with DepthRenderer(self.scene.model, self.intrinsics) as renderer:
+            depth = renderer.render(data, self.scene.camera)
+        log.log_observation(t, depth, self.intrinsics.matrix, self.intrinsics.width, self.intrinsics.height,
+                            self.camera_pose)
+        if chosen is not None:
+            log.log_grasps(t, chosen.candidate_points, chosen.candidate_approaches, chosen.candidate_scores,
+                           chosen.chosen_index)
+        else:
+            log.log_grasps(t, point[None], approach[None], None, 0)
+        model, tip, body = self.scene.model, self.episode.tip, self.episode.object
+        joints = [model.joint(j).name for j in range(model.njnt) if model.jnt_type[j] != mujoco.mjtJoint.mjJNT_FREE]
+        adr = [model.jnt_qposadr[model.joint(j).id] for j in joints]
+
+        def record(d: mujoco.MjData, cup: Any) -> None:
+            now = float(d.time)
+            log.log_transforms(now, {
+                "camera": self.camera_pose, "cup_tip": _pose(d.site_xpos[tip], d.site_xmat[tip]),
+                "object": _pose(d.xpos[body], d.xmat[body]),
+            })
+            log.log_joint_states(now, joints, d.qpos[adr].tolist())
+            log.log_suction(now, bool(d.ctrl[cup.actuator] > 0), cup.sealed >= 0, cup.compression(d))
+
+        self.episode.recorder = record
 
     def render_png(self, path: Path) -> None:
         """Save the overhead camera's colour view of the current state as a PNG."""

@@ -66,3 +66,20 @@ def load_object(key: str) -> ObjectRecord:
 def _user_sets() -> list[str]:
     root = user_root()
     return sorted(d.name for d in root.iterdir() if d.is_dir()) if root.is_dir() else []
+
+
+def resolve_objects(source: str) -> list[ObjectRecord]:
+    """Objects named by a set (basic, typical, adversarial, or a user set) or found in a directory:
+    a corpus (its train/ subfolder), a set folder of object folders, or one object folder."""
+    path = Path(source)
+    if not path.exists() and "/" not in source:
+        return list_objects(source)
+    if not path.is_dir():
+        raise InputError(f"objects '{source}': neither a known set nor a directory")
+    if (path / "object.toml").is_file():
+        return [ObjectRecord.load(path)]
+    root = path / "train" if (path / "corpus.json").is_file() else path
+    records = [ObjectRecord.load(d) for d in sorted(root.iterdir()) if (d / "object.toml").is_file()]
+    if not records:
+        raise InputError(f"objects '{source}': no object folders (with object.toml) found there")
+    return records

@@ -1,0 +1,1 @@
+"""Dataset generation: Dex-Net tensor storage, generation pipeline, execution engines."""

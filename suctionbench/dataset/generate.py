@@ -1,0 +1,340 @@
+"""Dex-Net-style dataset generation (paper: "Dex-Net 3.0 Dataset", "Environment Model").
+
+Per object: grasp candidates uniform on the surface with inward normals; for each of its most
+probable stable poses, the robust label of every candidate (gravity rotated into that pose);
+then images: a stable pose (uniform), a planar pose U([-0.1, 0.1]^2 x [0, 2pi)), a camera pose
+from the paper's spherical distribution, a rendered depth image with the noise model
+y = alpha y_hat + eps, and for every grasp visible at its pixel a 32 x 32 thumbnail, its pose
+vector and its label.
+
+Work is split into deterministic units, one per object with a fixed datapoint quota and its own
+random stream (seed, unit index), so any engine (a local process pool or Ray) and any
+interruption produce the same data. Units are written atomically to units/; shards in the Dex-Net
+tensor layout are assembled from them in order.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from suctionbench.config import STANDARD_GRAVITY, LabelConfig, to_dict
+from suctionbench.errors import InputError
+from suctionbench.io import atomic_path
+from suctionbench.sensing.noise import DepthNoiseConfig
+
+UNIT_FIELDS = ("depth_ims_tf_table", "hand_poses", "robust_suction_wrench_resistance", "object_labels",
+               "pose_labels", "image_labels", "grasp_labels", "seal_flags", "wrench_resistance")
+"""Per-datapoint arrays of a unit (and of a shard), in the Dex-Net naming."""
+
+MAX_IMAGES_PER_UNIT = 100_000
+"""Image ids are unit index x this + image number: unique without coordination."""
+
+
+@dataclass(frozen=True)
+class GenerationConfig:
+    """Everything that determines a dataset (two runs with equal configs write equal data)."""
+
+    datapoints: int
+    """Total number of datapoints."""
+
+    seed: int = 0
+    """Seed of every random draw (each unit draws from its own stream (seed, unit))."""
+
+    grasps_per_object: int = 200
+    """Grasp candidates sampled on each object's surface."""
+
+    stable_poses: int = 5
+    """The most probable stable poses of each object that are used (uniformly, as in the paper)."""
+
+    planar_range: float = 0.1
+    """Half-width (m) of the uniform planar translation of the object on the table."""
+
+    max_approach_angle: float = math.radians(80.0)
+    """Grasps whose approach is further than this from straight down are not recorded."""
+
+    max_images_per_object: int = 400
+    """An object whose visible grasps cannot fill its quota stops after this many images."""
+
+    datapoints_per_shard: int = 1000
+    """Datapoints per tensor file (Dex-Net: 1000)."""
+
+    label_threshold: float = 0.2
+    """Robust label above which a datapoint counts as positive (Dex-Net 3.0 training threshold)."""
+
+    noise: DepthNoiseConfig = field(default_factory=DepthNoiseConfig)
+    """Depth-image noise model."""
+
+    label: LabelConfig = field(default_factory=LabelConfig)
+    """Cup, seal, perturbation and metric configuration of the labels."""
+
+
+@dataclass(frozen=True)
+class Unit:
+    """One deterministic piece of work: `quota` datapoints from object `object_index`."""
+
+    index: int
+    object_index: int
+    quota: int
+
+
+def plan_units(num_objects: int, datapoints: int) -> list[Unit]:
+    """Split the datapoints as evenly as possible over the objects (one unit each)."""
+    if num_objects < 1:
+        raise InputError("generate: no objects to generate from")
+    base, extra = divmod(datapoints, num_objects)
+    return [Unit(i, i, base + (1 if i < extra else 0)) for i in range(num_objects) if base or i < extra]
+
+
+def config_fingerprint(config: GenerationConfig, camera: dict[str, Any], objects: list[str]) -> str:
+    """Hash of everything that determines the data: a resumed run must match it exactly."""
+    blob = json.dumps({"config": to_dict(config), "camera": camera, "objects": objects}, sort_keys=True)
+    return hashlib.sha256(blob.encode()).hexdigest()[:16]
+
+
+def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationConfig) -> dict[str, np.ndarray]:
+    """Generate one unit's datapoints (runs in a worker process or a Ray task)."""
+    from suctionbench.contact import SuctionLabeller
+    from suctionbench.dataset.render import TableScene
+    from suctionbench.geometry.sampling import sample_surface_grasps
+    from suctionbench.objects.build import ObjectRecord
+    from suctionbench.sensing.camera import CameraPoseConfig, resolve_camera, sample_camera_pose
+    from suctionbench.sensing.noise import apply_depth_noise
+    from suctionbench.sensing.thumbnails import extract_thumbnails, pose_vector, project_grasps, visible_mask
+
+    rng = np.random.default_rng((config.seed, unit.index))
+    record = ObjectRecord.load(Path(object_dir))
+    intrinsics = resolve_camera(camera)
+    mesh = record.mesh()
+    points, approaches = sample_surface_grasps(mesh, config.grasps_per_object, rng)
+    poses = [np.asarray(p["transform"]) for p in record.stable_poses[: config.stable_poses]]
+    labels = []
+    for s, pose in enumerate(poses):  # labels depend on which way gravity points in the object
+        gravity = pose[:3, :3].T @ np.array([0.0, 0.0, -STANDARD_GRAVITY])
+        labeller = SuctionLabeller(mesh, config.label, mass=record.mass, com=np.asarray(record.com), gravity=gravity)
+        label_seed = int(np.random.SeedSequence((config.seed, unit.index, s)).generate_state(1)[0])
+        labels.append(labeller.label(points, approaches, label_seed, metrics=("wr", "rwr")))
+    camera_config = CameraPoseConfig().for_camera(intrinsics)
+    out: dict[str, list[np.ndarray]] = {name: [] for name in UNIT_FIELDS}
+    count = 0
+    with TableScene(record, intrinsics) as scene:
+        for image in range(config.max_images_per_object):
+            if count >= unit.quota:
+                break
+            s = int(rng.integers(len(poses)))
+            x, y = rng.uniform(-config.planar_range, config.planar_range, 2)
+            yaw = rng.uniform(0.0, 2.0 * math.pi)
+            planar = np.eye(4)
+            planar[:3, :3] = [[math.cos(yaw), -math.sin(yaw), 0], [math.sin(yaw), math.cos(yaw), 0], [0, 0, 1]]
+            planar[:3, 3] = [x, y, 0.0]
+            object_pose = planar @ poses[s]
+            camera_pose = sample_camera_pose(rng, np.zeros(3), camera_config)
+            depth = scene.render(object_pose, camera_pose)
+            noisy = apply_depth_noise(depth, rng, config.noise)
+            p_world = points @ object_pose[:3, :3].T + object_pose[:3, 3]
+            v_world = approaches @ object_pose[:3, :3].T
+            rot, origin = camera_pose[:3, :3], camera_pose[:3, 3]
+            p_cam, v_cam = (p_world - origin) @ rot, v_world @ rot
+            pixels, depths, angles = project_grasps(p_cam, v_cam, intrinsics)
+            keep = visible_mask(pixels, depths, depth) & (-v_world[:, 2] >= math.cos(config.max_approach_angle))
+            idx = np.flatnonzero(keep)[: unit.quota - count]
+            if len(idx) == 0:
+                continue
+            thumbs = extract_thumbnails(noisy, pixels[idx], angles[idx])
+            pose_vec = pose_vector(depths[idx], v_world[idx])
+            lab = labels[s]
+            out["depth_ims_tf_table"].append(thumbs[..., None].astype(np.float32))
+            out["hand_poses"].append(np.column_stack([pixels[idx, 1], pixels[idx, 0], pose_vec, v_cam[idx]])
+                                     .astype(np.float32))
+            out["robust_suction_wrench_resistance"].append(lab.rwr[idx].astype(np.float32))
+            out["object_labels"].append(np.full(len(idx), unit.object_index, np.int32))
+            out["pose_labels"].append(np.full(len(idx), s, np.int32))
+            out["image_labels"].append(np.full(len(idx), unit.index * MAX_IMAGES_PER_UNIT + image, np.int32))
+            out["grasp_labels"].append(idx.astype(np.int32))
+            out["seal_flags"].append(lab.seal.seal[idx].astype(np.uint8))
+            out["wrench_resistance"].append(lab.wr[idx].astype(np.uint8))
+            count += len(idx)
+    return {name: np.concatenate(parts) if parts else _empty(name) for name, parts in out.items()}
+
+
+def _empty(name: str) -> np.ndarray:
+    shapes = {"depth_ims_tf_table": (0, 32, 32, 1), "hand_poses": (0, 7)}
+    dtypes = {"depth_ims_tf_table": np.float32, "hand_poses": np.float32,
+              "robust_suction_wrench_resistance": np.float32, "seal_flags": np.uint8, "wrench_resistance": np.uint8}
+    return np.zeros(shapes.get(name, (0,)), dtypes.get(name, np.int32))
+
+
+# -- unit files (resume) ---------------------------------------------------------------------------
+
+
+def unit_path(directory: Path, index: int) -> Path:
+    return Path(directory) / "units" / f"unit_{index:05d}.npz"
+
+
+def save_unit(directory: Path, index: int, arrays: dict[str, np.ndarray]) -> None:
+    """Write a finished unit atomically (a killed run never leaves a partial unit)."""
+    with atomic_path(unit_path(directory, index)) as tmp, open(tmp, "wb") as fh:
+        np.savez(fh, **arrays)
+
+
+def load_unit(directory: Path, index: int) -> dict[str, np.ndarray] | None:
+    """A unit file's arrays, or None if missing; raises InputError if it is corrupt."""
+    path = unit_path(directory, index)
+    if not path.exists():
+        return None
+    try:
+        with np.load(path) as data:
+            arrays = {name: data[name] for name in UNIT_FIELDS}
+    except Exception as exc:  # zip/pickle/key errors all mean the same: not a valid unit
+        raise InputError(f"unit file '{path}': corrupt ({type(exc).__name__})") from None
+    lengths = {len(a) for a in arrays.values()}
+    if len(lengths) != 1:
+        raise InputError(f"unit file '{path}': corrupt (fields of different lengths)")
+    return arrays
+
+
+# -- engines ---------------------------------------------------------------------------------------
+
+
+def run_units(
+    units: list[Unit], object_dirs: list[str], camera: str, config: GenerationConfig, *,
+    engine: str, workers: int, address: str | None,
+) -> Iterator[tuple[Unit, dict[str, np.ndarray]]]:
+    """Yield (unit, arrays) in unit order, computed by the chosen engine."""
+    if not units:
+        return
+    args = [(u, object_dirs[u.object_index], camera, config) for u in units]
+    if engine == "local":
+        if workers <= 1:
+            for a in args:
+                yield a[0], generate_unit(*a)
+            return
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            futures = [pool.submit(generate_unit, *a) for a in args]
+            for unit, future in zip(units, futures, strict=True):
+                yield unit, future.result()
+    elif engine == "ray":
+        try:
+            import ray
+        except ImportError:
+            raise InputError("--engine ray: Ray is not installed (pip install 'suctionbench[ray]')") from None
+        started = not ray.is_initialized()
+        if started:
+            ray.init(address=address, num_cpus=None if address else workers, include_dashboard=False,
+                     log_to_driver=False, ignore_reinit_error=True)
+        try:
+            remote = ray.remote(generate_unit)
+            refs = [remote.remote(*a) for a in args]
+            for unit, ref in zip(units, refs, strict=True):
+                yield unit, ray.get(ref)
+        finally:
+            if started:
+                ray.shutdown()
+    else:
+        raise InputError(f"--engine '{engine}': expected local or ray")
+
+
+def generate_dataset(
+    out: Path, object_dirs: list[str], object_keys: list[str], camera: str, config: GenerationConfig, *,
+    engine: str = "local", workers: int = 1, address: str | None = None, resume: bool = False,
+    overwrite: bool = False, progress: Callable[[int], None] | None = None,
+) -> dict[str, Any]:
+    """Generate (or resume) a dataset in `out`; returns its card."""
+    from suctionbench import __version__
+    from suctionbench.dataset.storage import DatasetWriter, read_card, write_card, write_splits
+    from suctionbench.sensing.camera import resolve_camera
+
+    if config.datapoints < 1:
+        raise InputError(f"--datapoints {config.datapoints}: must be at least 1")
+    out = Path(out)
+    camera_dict = to_dict(resolve_camera(camera))
+    fingerprint = config_fingerprint(config, camera_dict, object_keys)
+    if out.exists() and any(out.iterdir()):
+        try:
+            existing = read_card(out).get("fingerprint")
+        except InputError:
+            existing = None
+        if overwrite:
+            import shutil
+
+            shutil.rmtree(out)
+        elif not resume:
+            raise InputError(f"output '{out}' exists (pass --resume to continue it or --overwrite to replace it)")
+        elif existing not in (None, fingerprint):
+            raise InputError(f"output '{out}' holds a dataset with a different configuration (use --overwrite)")
+    out.mkdir(parents=True, exist_ok=True)
+    card: dict[str, Any] = {
+        "fingerprint": fingerprint, "suctionbench_version": __version__, "config": to_dict(config),
+        "camera": camera_dict, "objects": object_keys, "status": "generating",
+    }
+    write_card(out, card)
+
+    units = plan_units(len(object_dirs), config.datapoints)
+    todo, corrupt = [], []
+    for unit in units:
+        try:
+            done = load_unit(out, unit.index) is not None
+        except InputError as exc:
+            corrupt.append(str(exc))
+            done = False
+        if not done:
+            todo.append(unit)
+        elif progress:
+            progress(unit.quota)
+    for unit, arrays in run_units(todo, object_dirs, camera, config, engine=engine, workers=workers, address=address):
+        save_unit(out, unit.index, arrays)
+        if progress:
+            progress(unit.quota)
+
+    writer = DatasetWriter(out, datapoints_per_shard=config.datapoints_per_shard)
+    stats = _assemble_shards(out, units, writer, config.datapoints_per_shard, config.label_threshold)
+    write_splits(out, stats.pop("image_ids"), stats.pop("object_ids"), val_fraction=0.2, seed=config.seed)
+    card.update(stats, status="complete", regenerated_corrupt_units=corrupt)
+    write_card(out, card)
+    return card
+
+
+def _assemble_shards(out: Path, units: list[Unit], writer: Any, per_shard: int, threshold: float) -> dict[str, Any]:
+    """Stream the units, in order, into fixed-size shards (at most one shard in memory)."""
+    buffer: dict[str, list[np.ndarray]] = {name: [] for name in UNIT_FIELDS}
+    buffered, shard, total, positives = 0, 0, 0, 0
+    image_ids, object_ids = [], []
+
+    def flush(final: bool) -> None:
+        nonlocal buffered, shard
+        merged = {name: np.concatenate(parts) for name, parts in buffer.items()}
+        while buffered >= per_shard or (final and buffered):
+            n = min(per_shard, buffered)
+            writer.write_shard(shard, {name: arr[:n] for name, arr in merged.items()})
+            merged = {name: arr[n:] for name, arr in merged.items()}
+            buffered -= n
+            shard += 1
+        for name in buffer:
+            buffer[name] = [merged[name]]
+
+    for unit in units:
+        arrays = load_unit(out, unit.index)
+        for name in UNIT_FIELDS:
+            buffer[name].append(arrays[name])
+        n = len(arrays["image_labels"])
+        buffered, total = buffered + n, total + n
+        positives += int((arrays["robust_suction_wrench_resistance"] > threshold).sum())
+        image_ids.append(arrays["image_labels"])
+        object_ids.append(arrays["object_labels"])
+        if buffered >= per_shard:
+            flush(final=False)
+    flush(final=True)
+    return {
+        "datapoints": total, "shards": shard, "positive_rate": round(positives / total, 4) if total else 0.0,
+        "image_ids": np.concatenate(image_ids) if image_ids else np.zeros(0, np.int32),
+        "object_ids": np.concatenate(object_ids) if object_ids else np.zeros(0, np.int32),
+    }

@@ -199,3 +199,59 @@ def bench_agreement(*, set_name: str, trials: int, seed: int, threshold: float =
         "outcomes": dict(sorted(failures.items())),
         "per_trial": rows,
     }
+
+
+def bench_generate(*, objects: str, datapoints: int, workers: int, seed: int) -> dict[str, Any]:
+    """Datapoints/s of dataset generation with all workers vs one worker (the serial reference)
+    on the same configuration, render ms per frame, robust-label ms per grasp, and peak memory."""
+    import tempfile
+    from pathlib import Path
+
+    from suctionbench.contact import SuctionLabeller
+    from suctionbench.dataset.generate import GenerationConfig, generate_dataset
+    from suctionbench.dataset.render import TableScene
+    from suctionbench.geometry.sampling import sample_surface_grasps
+    from suctionbench.objects.registry import resolve_objects
+    from suctionbench.sensing.camera import CameraPoseConfig, camera_preset, sample_camera_pose
+
+    if datapoints < 1 or workers < 1:
+        raise InputError("bench generate: need --datapoints >= 1 and --workers >= 1")
+    records = resolve_objects(objects)
+    dirs, keys = [str(r.directory) for r in records], [r.key for r in records]
+    config = GenerationConfig(datapoints=datapoints, seed=seed)
+    rates = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, count in (("parallel", workers), ("serial", 1)):
+            start = time.perf_counter()
+            card = generate_dataset(Path(tmp) / label, dirs, keys, "primesense", config, workers=count)
+            rates[label] = card["datapoints"] / (time.perf_counter() - start)
+    intrinsics = camera_preset("primesense")
+    rng = np.random.default_rng(seed)
+    with TableScene(records[0], intrinsics) as scene:
+        pose = records[0].most_probable_pose()
+        cameras = [sample_camera_pose(rng, np.zeros(3), CameraPoseConfig()) for _ in range(20)]
+        scene.render(pose, cameras[0])
+        start = time.perf_counter()
+        for cam in cameras:
+            scene.render(pose, cam)
+        render_ms = 1e3 * (time.perf_counter() - start) / len(cameras)
+    mesh = records[0].mesh()
+    points, approaches = sample_surface_grasps(mesh, 400, rng)
+    labeller = SuctionLabeller(mesh, config.label, mass=records[0].mass, com=records[0].com)
+    start = time.perf_counter()
+    labeller.label(points, approaches, seed, metrics=("wr", "rwr"))
+    label_ms = 1e3 * (time.perf_counter() - start) / len(points)
+    return {
+        "objects": objects,
+        "datapoints": datapoints,
+        "workers": workers,
+        "datapoints_per_s": round(rates["parallel"], 1),
+        "datapoints_per_s_per_core": round(rates["parallel"] / workers, 1),
+        "serial_datapoints_per_s": round(rates["serial"], 1),
+        "parallel_speedup": round(rates["parallel"] / rates["serial"], 2),
+        "render_ms_per_frame": round(render_ms, 2),
+        "label_ms_per_grasp": round(label_ms, 3),
+        "positive_rate": card["positive_rate"],
+        "max_rss_mb_main": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),
+        "max_rss_mb_worker": round(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024, 1),
+    }

@@ -668,6 +668,31 @@ def bench_agreement_cmd(
     _run(as_json, body)
 
 
+@bench_app.command("generate")
+def bench_generate_cmd(
+    objects: Annotated[str, typer.Option(help="Object set or directory.")] = "typical",
+    datapoints: Annotated[int, typer.Option(help="Datapoints per run.")] = 3000,
+    workers: Annotated[int, typer.Option(help="Workers of the parallel run (0 = all cores).")] = 0,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Dataset generation datapoints/s (all cores vs one), render ms/frame, label ms/grasp, memory."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.bench import bench_generate
+
+        result = bench_generate(objects=objects, datapoints=datapoints, workers=workers or os.cpu_count() or 1,
+                                seed=seed)
+        if not as_json:
+            table = Table(title="bench generate", show_header=False)
+            for key, value in result.items():
+                table.add_row(key, str(value))
+            Console().print(table)
+        return result
+
+    _run(as_json, body)
+
+
 def main() -> None:
     """Console-script entry point."""
     app()

@@ -38,6 +38,7 @@ def synthetic(n: int, seed: int = 0) -> dict[str, np.ndarray]:
         "object_labels": np.sort(rng.integers(0, 25, n)).astype(np.int32),
         "pose_labels": rng.integers(0, 5, n).astype(np.int32),
         "image_labels": np.repeat(np.arange(n), image_sizes)[:n].astype(np.int32),
+        "grasp_labels": rng.integers(0, 200, n).astype(np.int32),
         "seal_flags": rng.integers(0, 2, n).astype(np.uint8),
         "wrench_resistance": rng.integers(0, 2, n).astype(np.uint8),
     }

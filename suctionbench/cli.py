@@ -21,8 +21,9 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColumn, TextColumn, TimeRemainingColumn
 from rich.table import Table
+from rich.text import Text
 
 from suctionbench import __version__
 from suctionbench.errors import InputError
@@ -97,13 +98,20 @@ def _run(as_json: bool, body: Callable[[], dict[str, Any]]) -> None:
     _emit({"ok": True, **result}, as_json)
 
 
+class _RateColumn(ProgressColumn):
+    """Items per second of a progress task."""
+
+    def render(self, task: Any) -> Text:
+        return Text(f"{task.speed:,.0f}/s" if task.speed else "-/s")
+
+
 @contextmanager
 def _progress(total: int, label: str, enabled: bool) -> Iterator[Callable[[int], None]]:
     """A rich progress bar on an interactive stderr; a no-op callback otherwise."""
     if not enabled or not err.is_terminal:
         yield lambda _n: None
         return
-    columns = (TextColumn(label), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
+    columns = (TextColumn(label), BarColumn(), MofNCompleteColumn(), _RateColumn(), TimeRemainingColumn())
     with Progress(*columns, console=err, transient=True) as bar:
         task = bar.add_task(label, total=total)
         yield lambda n: bar.advance(task, n)
@@ -386,7 +394,7 @@ def dataset_show(
         card = read_card(directory)
         reader = DatasetReader(directory)
         summary = {
-            "datapoints": reader.num_datapoints, "shards": len(reader.shards) if hasattr(reader, "shards") else None,
+            "datapoints": reader.num_datapoints, "shards": reader.num_shards,
             "positive_rate": card.get("positive_rate"), "camera": card.get("camera", {}).get("name"),
             "objects": len(card.get("objects", [])), "status": card.get("status"),
             "threshold": card.get("config", {}).get("label_threshold"),

@@ -27,11 +27,18 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     try:
         yield tmp_path
         try:
+            os.chmod(tmp_path, 0o666 & ~_umask())  # mkstemp makes 0600 files; use the usual mode
             os.replace(tmp_path, path)
         except OSError as exc:
             raise InputError(f"output '{path}': cannot write there ({exc.strerror})") from None
     finally:
         tmp_path.unlink(missing_ok=True)
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def save_npz(path: str | Path, **arrays: np.ndarray) -> None:

@@ -145,6 +145,9 @@ def test_bad_inputs(tmp_path):
     with pytest.raises(InputError, match="camera"):
         record = load_object(KEYS[0])
         gen.generate_dataset(tmp_path / "y", [str(record.directory)], KEYS[:1], "no-such-camera", CONFIG)
+    with pytest.raises(InputError, match="cannot create"):
+        record = load_object(KEYS[0])
+        gen.generate_dataset(Path("/proc/no/such/dir"), [str(record.directory)], KEYS[:1], "primesense", CONFIG)
     with pytest.raises(InputError, match="engine"):
         record = load_object(KEYS[0])
         gen.generate_dataset(tmp_path / "z", [str(record.directory)], KEYS[:1], "primesense", CONFIG, engine="spark")

@@ -248,9 +248,14 @@ def generate_dataset(
     engine: str = "local", workers: int = 1, address: str | None = None, resume: bool = False,
     overwrite: bool = False, progress: Callable[[int], None] | None = None,
 ) -> dict[str, Any]:
-    """Generate (or resume) a dataset in `out`; returns its card."""
+    """Generate (or resume) a dataset in `out`; returns its card.
+
+    On resume, finished units are reused after checking them (a corrupt unit is reported and
+    generated again) and every shard is rebuilt from the units, so a damaged shard is never
+    trusted; problems found in the old shards are reported in the card.
+    """
     from suctionbench import __version__
-    from suctionbench.dataset.storage import DatasetWriter, read_card, write_card, write_splits
+    from suctionbench.dataset.storage import DatasetReader, DatasetWriter, read_card, write_card, write_splits
     from suctionbench.sensing.camera import resolve_camera
 
     if config.datapoints < 1:
@@ -271,7 +276,11 @@ def generate_dataset(
             raise InputError(f"output '{out}' exists (pass --resume to continue it or --overwrite to replace it)")
         elif existing not in (None, fingerprint):
             raise InputError(f"output '{out}' holds a dataset with a different configuration (use --overwrite)")
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"output '{out}': cannot create it ({exc.strerror})") from None
+    shard_problems = DatasetReader(out).verify() if (out / "tensors").is_dir() else []
     card: dict[str, Any] = {
         "fingerprint": fingerprint, "suctionbench_version": __version__, "config": to_dict(config),
         "camera": camera_dict, "objects": object_keys, "status": "generating",
@@ -298,7 +307,7 @@ def generate_dataset(
     writer = DatasetWriter(out, datapoints_per_shard=config.datapoints_per_shard)
     stats = _assemble_shards(out, units, writer, config.datapoints_per_shard, config.label_threshold)
     write_splits(out, stats.pop("image_ids"), stats.pop("object_ids"), val_fraction=0.2, seed=config.seed)
-    card.update(stats, status="complete", regenerated_corrupt_units=corrupt)
+    card.update(stats, status="complete", regenerated_corrupt_units=corrupt, rewritten_shard_problems=shard_problems)
     write_card(out, card)
     return card
 

@@ -115,12 +115,19 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
     mesh = record.mesh()
     points, approaches = sample_surface_grasps(mesh, config.grasps_per_object, rng)
     poses = [np.asarray(p["transform"]) for p in record.stable_poses[: config.stable_poses]]
-    labels = []
-    for s, pose in enumerate(poses):  # labels depend on which way gravity points in the object
-        gravity = pose[:3, :3].T @ np.array([0.0, 0.0, -STANDARD_GRAVITY])
-        labeller = SuctionLabeller(mesh, config.label, mass=record.mass, com=np.asarray(record.com), gravity=gravity)
-        label_seed = int(np.random.SeedSequence((config.seed, unit.index, s)).generate_state(1)[0])
-        labels.append(labeller.label(points, approaches, label_seed, metrics=("wr", "rwr")))
+    labels: dict[int, Any] = {}
+
+    def labels_in_pose(s: int) -> Any:
+        """Robust labels of all candidates in stable pose s (gravity rotated into the pose),
+        computed on first use: each pose has its own seed, so laziness changes no value."""
+        if s not in labels:
+            gravity = poses[s][:3, :3].T @ np.array([0.0, 0.0, -STANDARD_GRAVITY])
+            labeller = SuctionLabeller(mesh, config.label, mass=record.mass, com=np.asarray(record.com),
+                                       gravity=gravity)
+            label_seed = int(np.random.SeedSequence((config.seed, unit.index, s)).generate_state(1)[0])
+            labels[s] = labeller.label(points, approaches, label_seed, metrics=("wr", "rwr"))
+        return labels[s]
+
     camera_config = CameraPoseConfig().for_camera(intrinsics)
     out: dict[str, list[np.ndarray]] = {name: [] for name in UNIT_FIELDS}
     count = 0
@@ -149,7 +156,7 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
                 continue
             thumbs = extract_thumbnails(noisy, pixels[idx], angles[idx])
             pose_vec = pose_vector(depths[idx], v_world[idx])
-            lab = labels[s]
+            lab = labels_in_pose(s)
             out["depth_ims_tf_table"].append(thumbs[..., None].astype(np.float32))
             out["hand_poses"].append(np.column_stack([pixels[idx, 1], pixels[idx, 0], pose_vec, v_cam[idx]])
                                      .astype(np.float32))

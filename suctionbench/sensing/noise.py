@@ -284,3 +284,29 @@ def apply_depth_noise_torch(
     noisy = alpha[:, None, None, None] * images + field[:, None]
     valid = images > 0
     return torch.where(valid & (noisy > 0), noisy, torch.where(valid, torch.zeros_like(images), images))
+
+
+@dataclass(frozen=True)
+class AxialNoiseConfig:
+    """Per-pixel axial noise of a structured-light sensor (Nguyen et al. 2012, for PrimeSense
+    technology): sigma(z) = base + quadratic (z - offset)^2. This is the simulated camera the
+    robot looks through; the Dex-Net model above (with its ~3 % global scale factor) is the
+    training-data augmentation, deliberately harsher than a calibrated sensor."""
+
+    base: float = 0.0012
+    """Noise std (m) at the sensor's best distance."""
+
+    quadratic: float = 0.0019
+    """Growth of the std (m per m^2) with the squared distance beyond `offset`."""
+
+    offset: float = 0.4
+    """Distance (m) of the smallest noise."""
+
+
+def apply_axial_noise(depth: np.ndarray, rng: np.random.Generator, config: AxialNoiseConfig | None = None) -> np.ndarray:
+    """Independent Gaussian axial noise per pixel with depth-dependent std (zeros stay zero)."""
+    config = config or AxialNoiseConfig()
+    depth = np.asarray(depth, dtype=np.float32)
+    sigma = config.base + config.quadratic * (depth - config.offset) ** 2
+    noisy = depth + (sigma * rng.standard_normal(depth.shape)).astype(np.float32)
+    return np.where(depth > 0, np.maximum(noisy, 0.0), 0.0).astype(np.float32)

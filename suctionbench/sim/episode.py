@@ -59,8 +59,9 @@ class EpisodeConfig:
     pregrasp_offset: float = 0.06
     """Distance before the target along the approach where the straight approach starts."""
 
-    press_depth: float = 0.004
-    """How far past the surface the approach aims, so the bellow compresses."""
+    press_depth: float = 0.03
+    """How far past the target the guarded approach may continue before giving up: it stops as
+    soon as the bellow compresses, so sensing errors of up to this much are absorbed."""
 
     compression_stop: float = 0.002
     """The approach stops once the bellow is compressed this much (contact made)."""
@@ -301,7 +302,7 @@ class PickEpisode:
             self.watch_collisions = True  # the arm must not touch anything on the way in
             self._run(np.array([q0, q_pre]), self._duration(np.array([q0, q_pre]), 0.5))
             phases["pregrasp"] = d.time - start_sim
-            self._run(path_in, c.pregrasp_offset / c.approach_speed,
+            self._run(path_in, (c.pregrasp_offset + c.press_depth) / c.approach_speed,
                       watch=lambda _s: self.cup.compression(d) >= c.compression_stop)
             self.watch_collisions = False
             q_contact = d.qpos[self.arm_qpos].copy()

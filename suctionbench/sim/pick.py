@@ -58,6 +58,12 @@ class PickRequest:
     record: ObjectRecord | None = None
     """An object record to use instead of looking up `object_key` (e.g. a freshly built one)."""
 
+    model: str | None = None
+    """GQ-CNN model directory for the gqcnn policy (default: the shipped model)."""
+
+    observation_noise: bool = True
+    """Apply the simulated sensor's axial noise (sensing.noise.AxialNoiseConfig) to observations."""
+
 
 def _pose(position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
     """4x4 transform from a position and a flat 3x3 rotation."""
@@ -145,8 +151,9 @@ class PickRunner:
             point, approach = chosen.point, chosen.approach
             q = None if np.isnan(chosen.score) else chosen.score
         else:
-            known = ", ".join(KNOWN_STATE_POLICIES)
-            raise InputError(f"--policy '{req.policy}' is unknown here (available: {known})")
+            chosen = self._plan_from_image()
+            point, approach = chosen.point, chosen.approach
+            q = None if np.isnan(chosen.score) else chosen.score
         labeller = SuctionLabeller(mesh, LabelConfig(cup=req.cup), mass=self.record.mass, com=com)
         labels = labeller.label(point[None], approach[None], req.seed, metrics=("wr", "rwr"))
         if render is not None:
@@ -170,6 +177,49 @@ class PickRunner:
         if log is not None:
             log.log_result(float(self.episode.data.time), record)
         return record
+
+    def observe(self) -> Any:
+        """The policy's view: the overhead depth image (with sensor noise) and the camera."""
+        from suctionbench.policies.base import Observation
+        from suctionbench.sensing.camera import DepthRenderer
+        from suctionbench.sensing.noise import apply_axial_noise
+
+        with DepthRenderer(self.scene.model, self.intrinsics) as renderer:
+            depth = renderer.render(self.episode.data, self.scene.camera)
+        if self.request.observation_noise:
+            depth = apply_axial_noise(depth, np.random.default_rng((self.request.seed, 2)))
+        return Observation(depth=depth, intrinsics=self.intrinsics, camera_pose=self.camera_pose,
+                           mask=self.object_mask())
+
+    def object_mask(self) -> np.ndarray:
+        """Pixels of the object in the overhead camera (MuJoCo segmentation rendering)."""
+        model = self.scene.model
+        renderer = mujoco.Renderer(model, self.intrinsics.height, self.intrinsics.width)
+        try:
+            renderer.enable_segmentation_rendering()
+            renderer.update_scene(self.episode.data, self.scene.camera)
+            seg = renderer.render()
+        finally:
+            renderer.close()
+        geoms = np.flatnonzero(model.geom_bodyid == self.episode.object)
+        return (seg[..., 1] == mujoco.mjtObj.mjOBJ_GEOM) & np.isin(seg[..., 0], geoms)
+
+    def _plan_from_image(self) -> Any:
+        """Run an image policy from the registry on the current observation (world-frame result)."""
+        from suctionbench.policies.analytic import RankedGrasp
+        from suctionbench.policies.base import make_policy
+
+        kwargs = {"model": self.request.model} if self.request.policy == "gqcnn" and self.request.model else {}
+        policy = make_policy(self.request.policy, **kwargs)
+        action = policy.plan(self.observe(), np.random.default_rng((self.request.seed, 3)))
+        rot, origin = self.camera_pose[:3, :3], self.camera_pose[:3, 3]
+        cands = action.candidates
+        return RankedGrasp(
+            action.point_world, action.approach_world, float(action.q),
+            cands["points"] @ rot.T + origin if "points" in cands else action.point_world[None],
+            cands["approaches"] @ rot.T if "approaches" in cands else action.approach_world[None],
+            cands.get("q"), int(np.argmax(cands["q"])) if cands.get("q") is not None and len(cands["q"]) else 0,
+        )
 
     def _log_start(self, log: Any, point: np.ndarray, approach: np.ndarray, chosen: Any) -> None:
         """Observation, candidates and chosen grasp; then state every `record_every` steps."""

@@ -303,7 +303,9 @@ class AxialNoiseConfig:
     """Distance (m) of the smallest noise."""
 
 
-def apply_axial_noise(depth: np.ndarray, rng: np.random.Generator, config: AxialNoiseConfig | None = None) -> np.ndarray:
+def apply_axial_noise(
+    depth: np.ndarray, rng: np.random.Generator, config: AxialNoiseConfig | None = None
+) -> np.ndarray:
     """Independent Gaussian axial noise per pixel with depth-dependent std (zeros stay zero)."""
     config = config or AxialNoiseConfig()
     depth = np.asarray(depth, dtype=np.float32)

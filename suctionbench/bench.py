@@ -255,3 +255,49 @@ def bench_generate(*, objects: str, datapoints: int, workers: int, seed: int) ->
         "max_rss_mb_main": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),
         "max_rss_mb_worker": round(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024, 1),
     }
+
+
+def bench_plan(*, policies: list[str], model: str | None, scenes: int, seed: int, cores: int) -> dict[str, Any]:
+    """Seconds per planned grasp of each image policy on rendered scenes of the typical set; for
+    gqcnn also the reference (the same CEM with one network call per candidate, unbatched)."""
+    from suctionbench.objects.registry import list_objects
+    from suctionbench.policies.base import make_policy
+    from suctionbench.sim.pick import PickRequest, PickRunner
+
+    used_cores = _limit_cores(cores)
+    records = list_objects("typical")[:: max(1, 25 // scenes)][:scenes]
+    observations = []
+    for i, record in enumerate(records):
+        runner = PickRunner(PickRequest(record.key, seed=seed + i, record=record))
+        runner.reset()
+        observations.append(runner.observe())
+    result: dict[str, Any] = {"scenes": len(observations), "cores": used_cores}
+    for name in policies:
+        policy = make_policy(name, **({"model": model} if name == "gqcnn" and model else {}))
+        policy.plan(observations[0], np.random.default_rng(seed))  # warm-up (model load, caches)
+        start = time.perf_counter()
+        for k, obs in enumerate(observations):
+            policy.plan(obs, np.random.default_rng(seed + k))
+        result[f"{name}_s_per_grasp"] = round((time.perf_counter() - start) / len(observations), 4)
+        if name == "gqcnn":
+            scorer = policy.model
+            unbatched = _Unbatched(scorer)
+            policy.model = unbatched
+            start = time.perf_counter()
+            policy.plan(observations[0], np.random.default_rng(seed))
+            result["gqcnn_reference_unbatched_s_per_grasp"] = round(time.perf_counter() - start, 4)
+            result["gqcnn_batching_speedup"] = round(
+                result["gqcnn_reference_unbatched_s_per_grasp"] / result["gqcnn_s_per_grasp"], 1
+            )
+            policy.model = scorer
+    return result
+
+
+class _Unbatched:
+    """A model wrapper evaluating one candidate per network call (the timing reference)."""
+
+    def __init__(self, model: Any):
+        self.model = model
+
+    def predict(self, images: np.ndarray, poses: np.ndarray) -> np.ndarray:
+        return np.concatenate([self.model.predict(images[i : i + 1], poses[i : i + 1]) for i in range(len(images))])

@@ -270,7 +270,11 @@ def pick(
     grasp: Annotated[
         str | None, typer.Option(help="Grasp 'x,y,z,vx,vy,vz' in the object's own frame (default: --policy).")
     ] = None,
-    policy: Annotated[str, typer.Option(help="Policy choosing the grasp when no --grasp: analytic.")] = "analytic",
+    policy: Annotated[
+        str, typer.Option(help="Policy when no --grasp: analytic, random-surface (known state) or an image policy "
+                               "(random, centroid, planarity, planarity-centroid, gqcnn).")
+    ] = "analytic",
+    model: Annotated[str | None, typer.Option(help="GQ-CNN model directory (gqcnn policy).")] = None,
     placement: Annotated[str, typer.Option(help="drop (random orientation) or stable (most probable pose).")] = "drop",
     cup: Annotated[str, typer.Option(help="Cup preset: default or paper.")] = "default",
     camera: Annotated[str, typer.Option(help="Camera preset or intrinsics TOML.")] = "primesense",
@@ -292,7 +296,7 @@ def pick(
                 raise InputError(f"--grasp approach {values[3:].tolist()}: must be a unit vector")
         request = PickRequest(
             object_key, seed=seed, grasp=values, policy=policy, placement=placement, cup=cup_preset(cup),
-            camera=camera,
+            camera=camera, model=model,
         )
         if log is not None and log.suffix != ".mcap":
             raise InputError(f"--log '{log}': expected a .mcap file name")
@@ -693,6 +697,36 @@ def bench_generate_cmd(
                                 seed=seed)
         if not as_json:
             table = Table(title="bench generate", show_header=False)
+            for key, value in result.items():
+                table.add_row(key, str(value))
+            Console().print(table)
+        return result
+
+    _run(as_json, body)
+
+
+@bench_app.command("plan")
+def bench_plan_cmd(
+    policies: Annotated[str, typer.Option(help="Comma-separated image policies.")] = (
+        "random,centroid,planarity,planarity-centroid,gqcnn"
+    ),
+    model: Annotated[str | None, typer.Option(help="GQ-CNN model directory (default: the shipped one).")] = None,
+    scenes: Annotated[int, typer.Option(help="Rendered scenes (typical objects) per policy.")] = 5,
+    cores: Annotated[int, typer.Option(help="CPU cores the process may use (0 = all).")] = 0,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Seconds per planned grasp for each policy (gqcnn also against unbatched network calls)."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.bench import bench_plan
+
+        if scenes < 1:
+            raise InputError(f"--scenes {scenes}: must be at least 1")
+        result = bench_plan(policies=[p for p in policies.split(",") if p], model=model, scenes=scenes, seed=seed,
+                            cores=cores)
+        if not as_json:
+            table = Table(title="bench plan", show_header=False)
             for key, value in result.items():
                 table.add_row(key, str(value))
             Console().print(table)

@@ -1,0 +1,212 @@
+"""Trained GQ-CNNs on disk: ``model.safetensors`` + ``model.json``, and the trainer's resume state.
+
+A model directory holds
+
+- ``model.safetensors``: the network's tensors under gqcnn's layer names (``image_stream.conv1_1.0.weight``,
+  ``merge.fc4.bias``, ...). safetensors rather than a pickle, so loading a downloaded model cannot
+  run code, and any framework can read the weights.
+- ``model.json``: the model card -- architecture, input normalisation, label definition, a summary
+  of the dataset (camera, cup, split, counts), metrics, training time, the command that made it,
+  software versions -- and the sha256 of ``model.safetensors``, so a weights file that does not
+  belong to its card (a partial copy, a mix of two runs) is refused instead of silently used.
+- ``train_state.pt`` (while training; see `suctionbench.learning.train`): model, optimiser,
+  scheduler and RNG states for resuming. Not needed for inference.
+
+Every file is written atomically (temporary file + rename); the weights go first and the card
+second, so a card never names weights that are not there yet.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import platform
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from suctionbench.errors import InputError
+from suctionbench.io import atomic_path
+from suctionbench.learning.data import NormStats
+from suctionbench.learning.models import IMAGE_SIZE, build_model
+
+WEIGHTS_NAME = "model.safetensors"
+CARD_NAME = "model.json"
+CARD_FORMAT = "suctionbench-gqcnn-1"
+
+PREDICT_BATCH = 1024
+"""Grasps per forward pass in `GQCNNModel.predict`: bounds memory (dn3: ~0.3 GB of activations)."""
+
+
+def versions() -> dict[str, str]:
+    """Software versions worth recording next to a trained model."""
+    import safetensors
+
+    from suctionbench import __version__
+
+    return {"suctionbench": __version__, "torch": torch.__version__, "numpy": np.__version__,
+            "safetensors": safetensors.__version__, "python": platform.python_version()}
+
+
+def json_safe(value: Any) -> Any:
+    """`value` with NaN / infinities replaced by None (strict JSON has no NaN) and numpy scalars as Python."""
+    if isinstance(value, dict):
+        return {str(k): json_safe(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [json_safe(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+class GQCNNModel:
+    """A trained GQ-CNN ready for inference: network + input normalisation + model card.
+
+    `predict` takes thumbnails and pose vectors exactly as a dataset stores them (metres, unsigned
+    approach angle) and returns the probability that each grasp succeeds.
+    """
+
+    def __init__(self, network: torch.nn.Module, stats: NormStats, card: dict[str, Any], device: str = "cpu"):
+        self.network = network.to(device).eval()
+        self.stats = stats
+        self.card = card
+        self.device = torch.device(device)
+
+    @property
+    def arch(self) -> str:
+        return self.card["arch"]
+
+    def predict(self, images: np.ndarray, poses: np.ndarray, batch_size: int = PREDICT_BATCH) -> np.ndarray:
+        """Success probability q (N,) float64 for thumbnails (N, 32, 32) [or (N, 32, 32, 1)] float32 metres
+        and poses (N, 2) = [gripper depth (m), approach angle (rad)]; batched, without gradients."""
+        images = np.asarray(images)
+        poses = np.asarray(poses)
+        if images.ndim == 4 and images.shape[-1] == 1:
+            images = images[..., 0]
+        if images.ndim != 3 or images.shape[1:] != (IMAGE_SIZE, IMAGE_SIZE):
+            raise InputError(f"images: shape {images.shape}, expected (N, {IMAGE_SIZE}, {IMAGE_SIZE})")
+        if poses.shape != (len(images), 2):
+            raise InputError(f"poses: shape {poses.shape}, expected ({len(images)}, 2) to match the images")
+        for name, arr in (("images", images), ("poses", poses)):
+            if arr.dtype.kind not in "fiu" or not np.isfinite(arr).all():
+                raise InputError(f"{name}: must be finite numbers (dtype {arr.dtype})")
+        out = np.empty(len(images), dtype=np.float64)
+        with torch.no_grad():
+            for start in range(0, len(images), batch_size):
+                im = torch.from_numpy(np.ascontiguousarray(images[start:start + batch_size], dtype=np.float32))
+                po = torch.from_numpy(np.ascontiguousarray(poses[start:start + batch_size], dtype=np.float32))
+                im, po = self.stats.normalise(im[:, None].to(self.device), po.to(self.device))
+                logits = self.network(im, po).float()
+                out[start:start + len(im)] = torch.softmax(logits, dim=1)[:, 1].cpu().numpy()
+        return out
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        while chunk := fh.read(1 << 20):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def save_model(directory: str | Path, model: GQCNNModel) -> Path:
+    """Write ``model.safetensors`` then ``model.json`` into `directory`; returns the card path.
+
+    The card is `model.card` plus the arch, normalisation statistics, format tag and weights hash.
+    """
+    from safetensors.torch import save_file
+
+    directory = Path(directory)
+    weights = directory / WEIGHTS_NAME
+    tensors = {k: v.detach().to("cpu").contiguous().clone() for k, v in model.network.state_dict().items()}
+    with atomic_path(weights) as tmp:
+        save_file(tensors, str(tmp), metadata={"format": CARD_FORMAT, "arch": model.arch})
+    card = dict(model.card)
+    card.update(format=CARD_FORMAT, normalisation=model.stats.to_dict(), weights=WEIGHTS_NAME,
+                weights_sha256=_sha256(weights))
+    text = json.dumps(json_safe(card), indent=2, allow_nan=False) + "\n"
+    path = directory / CARD_NAME
+    with atomic_path(path) as tmp:
+        tmp.write_text(text)
+    model.card = card
+    return path
+
+
+def read_model_card(directory: str | Path) -> dict[str, Any]:
+    """The card of a model directory; InputError if it is missing or malformed."""
+    path = Path(directory) / CARD_NAME
+    if not Path(directory).is_dir():
+        raise InputError(f"model '{directory}': not a directory")
+    try:
+        card = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise InputError(f"model card '{path}': missing (not a trained model directory?)") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"model card '{path}': unreadable ({exc})") from None
+    except json.JSONDecodeError as exc:
+        raise InputError(f"model card '{path}': malformed JSON (line {exc.lineno}: {exc.msg})") from None
+    if not isinstance(card, dict) or card.get("format") != CARD_FORMAT or not isinstance(card.get("arch"), str):
+        raise InputError(f"model card '{path}': not a {CARD_FORMAT} card (format or arch missing)")
+    return card
+
+
+def load_model(directory: str | Path, device: str = "cpu") -> GQCNNModel:
+    """A trained model from `directory`, on `device` (CPU by default); InputError if it is missing or corrupt."""
+    from safetensors import SafetensorError
+    from safetensors.torch import load_file
+
+    card = read_model_card(directory)
+    weights = Path(directory) / WEIGHTS_NAME
+    if not weights.is_file():
+        raise InputError(f"model weights '{weights}': missing")
+    if _sha256(weights) != card.get("weights_sha256"):
+        raise InputError(f"model weights '{weights}': sha256 does not match the card (corrupt or from another run)")
+    stats = NormStats.from_dict(card.get("normalisation"), source=f"model card '{Path(directory) / CARD_NAME}'")
+    try:
+        tensors = load_file(str(weights))
+    except (SafetensorError, OSError, ValueError) as exc:
+        raise InputError(f"model weights '{weights}': unreadable ({exc})") from None
+    network = build_model(card["arch"])
+    try:
+        network.load_state_dict(tensors, strict=True)
+    except RuntimeError as exc:
+        first = str(exc).strip().splitlines()[0]
+        raise InputError(f"model weights '{weights}': do not fit architecture '{card['arch']}' ({first})") from None
+    return GQCNNModel(network, stats, card, device=device)
+
+
+# -- trainer state ---------------------------------------------------------------------------------
+
+STATE_NAME = "train_state.pt"
+STATE_FORMAT = "suctionbench-train-state-1"
+
+
+def save_train_state(directory: str | Path, state: dict[str, Any]) -> Path:
+    """Write the trainer's resume state (``train_state.pt``) atomically."""
+    path = Path(directory) / STATE_NAME
+    with atomic_path(path) as tmp:
+        torch.save({"format": STATE_FORMAT, **state}, tmp)
+    return path
+
+
+def load_train_state(directory: str | Path) -> dict[str, Any] | None:
+    """The trainer's resume state in `directory`, None if there is none; InputError if it is corrupt.
+
+    Loaded with ``weights_only=True``: tensors and plain Python values only, no code.
+    """
+    path = Path(directory) / STATE_NAME
+    if not path.is_file():
+        return None
+    try:
+        state = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as exc:  # torch raises several types for a truncated or foreign file
+        raise InputError(f"training checkpoint '{path}': unreadable ({type(exc).__name__}); delete it to "
+                         "start over") from None
+    if not isinstance(state, dict) or state.get("format") != STATE_FORMAT:
+        raise InputError(f"training checkpoint '{path}': not a {STATE_FORMAT} file")
+    return state

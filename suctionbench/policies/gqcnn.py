@@ -1,0 +1,364 @@
+"""The GQ-CNN suction policy of Dex-Net 3.0: the cross-entropy method over grasp pixels, scored by a
+grasp-quality network (gqcnn's CrossEntropyRobustGraspingPolicy with the Dex-Net 3.0 settings of
+FACTS section 4).
+
+Algorithm (one `plan`)
+----------------------
+1. Seeds: `num_seed_samples` distinct valid pixels drawn uniformly (`base.scene_cloud`: object
+   pixels whose approach, minus the normal of the 1 px Gaussian-smoothed depth image, lies within
+   30 deg of the optical axis and 80 deg of straight down).
+2. Scoring a set of pixels: the grasp point is the depth pixel deprojected, the approach minus the
+   smoothed normal there; the 32 x 32 thumbnail is cut from the raw depth image around the pixel
+   and turned to the approach's image direction (`extract_thumbnails`), and the pose vector is
+   [gripper depth, angle between the approach and the table's downward normal] (`pose_vector`,
+   with the table normal brought into the camera frame by the camera pose). One batched
+   `model.predict(thumbnails, poses)` gives each grasp's success probability.
+3. `num_iters` times: take the top `elite_fraction` of the current set (ceil, at least 1), fit a
+   Gaussian mixture with ceil(`gmm_component_frac` x elites) components to their pixel centres
+   (u, v), the only features, standardised by the elites' mean and standard deviation (a zero
+   standard deviation counts as 1) with `gmm_reg_covar` added to every covariance's diagonal in
+   those units, as gqcnn does with scikit-learn; draw `num_gmm_samples` pixels from it (rounded to
+   the nearest pixel, redrawn while they miss the valid pixels), and score them (step 2): depth and
+   approach are always re-read from the image at the new pixel.
+4. Return the best grasp seen in any round (gqcnn returns the best of the last round; keeping the
+   best seen can only raise the result, and equals gqcnn's whenever the last round holds it).
+
+The mixture is fitted by a small EM in numpy (`fit_gmm`, no scikit-learn): centres start at
+distinct elites chosen with the policy's generator, one hard assignment to the nearest centre gives
+the first parameters, then EM runs to scikit-learn's defaults (100 iterations, tolerance 1e-3 on
+the mean log-likelihood). Every random draw comes from the generator passed to `plan`, so planning
+is deterministic.
+
+The network is anything with `predict(images (N, 32, 32) float32 metres, poses (N, 2) float32)
+-> (N,) probabilities` (duck typing); `make_policy("gqcnn")` loads one with
+`suctionbench.learning.checkpoint.load_model`, from the shipped default model unless a model or a
+model directory is given.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from suctionbench.errors import InputError
+from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, SceneCloud, scene_cloud
+from suctionbench.resources import asset_path
+from suctionbench.sensing.thumbnails import (
+    THUMBNAIL_GQCNN,
+    ThumbnailConfig,
+    extract_thumbnails,
+    pose_vector,
+    project_grasps,
+)
+
+DEFAULT_MODEL = ("models", "gqcnn-compact")
+"""Path parts, under assets/, of the model `make_policy("gqcnn")` loads when given none."""
+
+
+@runtime_checkable
+class GraspQualityModel(Protocol):
+    """What the policy needs of a GQ-CNN: batched success probabilities."""
+
+    def predict(self, images: np.ndarray, poses: np.ndarray) -> np.ndarray: ...
+
+
+# --------------------------------------------------------------------------------------------------
+# Configuration
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class CEMConfig:
+    """Cross-entropy method settings (gqcnn's Dex-Net 3.0 suction policy, FACTS section 4)."""
+
+    num_seed_samples: int = 250
+    """Pixels drawn uniformly for the first round. gqcnn: 250."""
+
+    num_iters: int = 3
+    """Refit-and-resample rounds after the seeds. gqcnn: 3."""
+
+    num_gmm_samples: int = 50
+    """Pixels drawn from the mixture in each round. gqcnn: 50."""
+
+    elite_fraction: float = 0.25
+    """Fraction of the current round's grasps, the best by predicted quality, that the mixture is
+    fitted to (gqcnn's `gmm_refit_p`): ceil(0.25 x 250) = 63 elites of the seeds, 13 later."""
+
+    gmm_component_frac: float = 0.4
+    """Mixture components per elite: ceil(0.4 x elites) (gqcnn: 0.4), i.e. 26 and then 6."""
+
+    gmm_reg_covar: float = 0.01
+    """Added to the diagonal of every component covariance, in units of the elites' standard
+    deviation (gqcnn passes it to scikit-learn as `reg_covar`, on standardised features): keeps
+    components from collapsing onto single elites. gqcnn: 0.01."""
+
+    gmm_max_iter: int = 100
+    """EM iterations at most per fit (scikit-learn's default, which gqcnn keeps)."""
+
+    gmm_tol: float = 1e-3
+    """EM stops when the mean log-likelihood changes by less than this (scikit-learn's default)."""
+
+    max_resample_rounds: int = 10
+    """Mixture samples are drawn in batches of twice the shortfall and those off the valid pixels
+    dropped; after this many batches a round goes on with the samples it has."""
+
+    sampler: SamplerConfig = field(default_factory=SamplerConfig)
+    """Valid grasp pixels and normal estimation: 30 deg to the optical axis, 80 deg to straight
+    down, 1 px depth smoothing (FACTS section 4)."""
+
+    thumbnail: ThumbnailConfig = THUMBNAIL_GQCNN
+    """Thumbnail geometry the network was trained on (96 px crop scaled to 32 x 32)."""
+
+    def __post_init__(self) -> None:
+        for key in ("num_seed_samples", "num_gmm_samples", "gmm_max_iter", "max_resample_rounds"):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+                raise InputError(f"CEM config: {key} = {value!r} must be a positive integer")
+        if isinstance(self.num_iters, bool) or not isinstance(self.num_iters, int | np.integer) or self.num_iters < 0:
+            raise InputError(f"CEM config: num_iters = {self.num_iters!r} must be a non-negative integer")
+        for key in ("elite_fraction", "gmm_component_frac"):
+            value = getattr(self, key)
+            if not (isinstance(value, int | float) and 0.0 < value <= 1.0):
+                raise InputError(f"CEM config: {key} = {value!r} must be in (0, 1]")
+        for key in ("gmm_reg_covar", "gmm_tol"):
+            value = getattr(self, key)
+            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+                raise InputError(f"CEM config: {key} = {value!r} must be a positive number")
+        if not isinstance(self.sampler, SamplerConfig):
+            raise InputError(f"CEM config: sampler = {self.sampler!r} must be a SamplerConfig")
+        if not isinstance(self.thumbnail, ThumbnailConfig):
+            raise InputError(f"CEM config: thumbnail = {self.thumbnail!r} must be a ThumbnailConfig")
+
+    def elite_count(self, population: int) -> int:
+        """Elites kept from a round of `population` grasps: max(ceil(fraction x population), 1)."""
+        return max(math.ceil(self.elite_fraction * population), 1)
+
+    def component_count(self, elites: int) -> int:
+        """Mixture components for `elites` elites: max(ceil(frac x elites), 1)."""
+        return max(math.ceil(self.gmm_component_frac * elites), 1)
+
+
+# --------------------------------------------------------------------------------------------------
+# Gaussian mixture (weighted EM, numpy)
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass
+class GaussianMixture:
+    """A full-covariance Gaussian mixture in D dimensions."""
+
+    weights: np.ndarray
+    """Component weights (K,), summing to 1."""
+
+    means: np.ndarray
+    """Component means (K, D)."""
+
+    covariances: np.ndarray
+    """Component covariances (K, D, D), symmetric positive definite."""
+
+    def log_likelihood(self, x: np.ndarray) -> np.ndarray:
+        """log p(x_i, component k) (N, K) = log w_k + log N(x_i; mu_k, Sigma_k)."""
+        chol = np.linalg.cholesky(self.covariances)  # (K, D, D)
+        diff = np.asarray(x, dtype=float)[None, :, :] - self.means[:, None, :]  # (K, N, D)
+        solved = np.linalg.solve(chol, diff.transpose(0, 2, 1))  # L^-1 (x - mu), (K, D, N)
+        mahalanobis = np.einsum("kdn,kdn->kn", solved, solved)
+        log_det = 2.0 * np.log(np.diagonal(chol, axis1=1, axis2=2)).sum(axis=1)
+        dim = self.means.shape[1]
+        log_pdf = -0.5 * (mahalanobis + log_det[:, None] + dim * math.log(2.0 * math.pi))
+        return (log_pdf + np.log(self.weights)[:, None]).T
+
+    def sample(self, count: int, rng: np.random.Generator) -> np.ndarray:
+        """`count` points (count, D): a component by weight, then a Gaussian draw from it."""
+        component = rng.choice(len(self.weights), size=count, p=self.weights)
+        noise = rng.standard_normal((count, self.means.shape[1]))
+        chol = np.linalg.cholesky(self.covariances)
+        return self.means[component] + np.einsum("nij,nj->ni", chol[component], noise)
+
+
+def _m_step(x: np.ndarray, resp: np.ndarray, reg_covar: float) -> GaussianMixture:
+    """Mixture parameters maximising the expected log-likelihood for responsibilities (N, K)."""
+    counts = resp.sum(axis=0) + 10.0 * np.finfo(float).eps  # as scikit-learn: no empty component
+    means = resp.T @ x / counts[:, None]
+    diff = x[None, :, :] - means[:, None, :]
+    covariances = np.einsum("nk,kni,knj->kij", resp, diff, diff) / counts[:, None, None]
+    covariances += reg_covar * np.eye(x.shape[1])
+    return GaussianMixture(counts / counts.sum(), means, covariances)
+
+
+def fit_gmm(
+    x: np.ndarray,
+    n_components: int,
+    rng: np.random.Generator,
+    *,
+    reg_covar: float = 0.01,
+    max_iter: int = 100,
+    tol: float = 1e-3,
+) -> GaussianMixture:
+    """Fit a full-covariance Gaussian mixture to points (N, D) by EM (see the module docstring).
+
+    Components are capped at N. Initial centres: distinct points chosen by `rng`; each point is
+    assigned to its nearest centre for the first M-step. Deterministic given the generator state.
+    """
+    x = np.asarray(x, dtype=float)
+    if x.ndim != 2 or len(x) == 0:
+        raise ValueError(f"fit_gmm needs points (N, D) with N > 0, got shape {x.shape}")
+    k = max(1, min(int(n_components), len(x)))
+    centres = x[rng.choice(len(x), size=k, replace=False)]
+    nearest = np.argmin(((x[:, None, :] - centres[None, :, :]) ** 2).sum(axis=2), axis=1)
+    gmm = _m_step(x, np.eye(k)[nearest], reg_covar)
+    previous = -np.inf
+    for _ in range(max_iter):
+        joint = gmm.log_likelihood(x)
+        top = joint.max(axis=1, keepdims=True)
+        log_norm = top[:, 0] + np.log(np.exp(joint - top).sum(axis=1))
+        gmm = _m_step(x, np.exp(joint - log_norm[:, None]), reg_covar)
+        mean_ll = float(log_norm.mean())
+        if abs(mean_ll - previous) < tol:
+            break
+        previous = mean_ll
+    return gmm
+
+
+# --------------------------------------------------------------------------------------------------
+# Models
+# --------------------------------------------------------------------------------------------------
+
+
+def default_model_dir() -> Path:
+    """Directory of the shipped default GQ-CNN (assets/models/gqcnn-compact)."""
+    return asset_path(*DEFAULT_MODEL)
+
+
+class LazyModel:
+    """A model directory loaded on the first `predict` (loading imports torch)."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        if not self.path.exists():
+            raise InputError(f"GQ-CNN model '{self.path}' does not exist; pass model=PATH to a trained model")
+        self._model: GraspQualityModel | None = None
+
+    def load(self) -> GraspQualityModel:
+        if self._model is None:
+            from suctionbench.learning.checkpoint import load_model
+
+            self._model = load_model(self.path)
+        return self._model
+
+    def predict(self, images: np.ndarray, poses: np.ndarray) -> np.ndarray:
+        return self.load().predict(images, poses)
+
+    def __repr__(self) -> str:
+        return f"LazyModel('{self.path}')"
+
+
+# --------------------------------------------------------------------------------------------------
+# Policy
+# --------------------------------------------------------------------------------------------------
+
+
+class GQCNNPolicy:
+    """Cross-entropy-method suction policy scored by a GQ-CNN (see the module docstring).
+
+    The returned grasp's candidates hold every scored grasp: `pixels`, `points`, `approaches`, `q`,
+    `poses` (N, 2) pose vectors and `iteration` (N,) (0 for the seeds, then 1..num_iters). `info`
+    has `plan_time`, `relaxed`, `evaluations`, `round_best_q` (best q of each round) and `chosen`.
+    """
+
+    name = "gqcnn"
+
+    def __init__(self, model: GraspQualityModel, config: CEMConfig | None = None, **overrides: Any) -> None:
+        if not callable(getattr(model, "predict", None)):
+            raise InputError(f"GQ-CNN policy: model {model!r} has no predict(images, poses) method")
+        self.model = model
+        self.config = dataclasses.replace(config or CEMConfig(), **overrides)
+
+    def __repr__(self) -> str:
+        return f"GQCNNPolicy({self.model!r}, {self.config})"
+
+    def score(
+        self, observation: Observation, cloud: SceneCloud, rows: np.ndarray, cols: np.ndarray
+    ) -> dict[str, np.ndarray]:
+        """Grasps at pixels (rows, cols) with their pose vectors and predicted quality."""
+        pixels, points, approaches = cloud.grasps_at(rows, cols)
+        _, depths, angles = project_grasps(points, approaches, cloud.intrinsics)
+        thumbnails = extract_thumbnails(observation.depth, pixels, angles, self.config.thumbnail)
+        poses = pose_vector(depths, approaches, cloud.table_normal)
+        q = np.asarray(self.model.predict(thumbnails, poses), dtype=float).reshape(-1)
+        if q.shape != (len(rows),):
+            raise RuntimeError(f"GQ-CNN model returned {q.shape} qualities for {len(rows)} grasps")
+        q = np.where(np.isfinite(q), q, -np.inf)
+        return {"pixels": pixels, "points": points, "approaches": approaches, "q": q, "poses": poses}
+
+    def _resample(
+        self, gmm: GaussianMixture, mean: np.ndarray, std: np.ndarray, cloud: SceneCloud, rng: np.random.Generator
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(rows, cols) of `num_gmm_samples` mixture samples that land on valid pixels."""
+        height, width = cloud.valid.shape
+        wanted = self.config.num_gmm_samples
+        rows, cols = np.empty(0, dtype=np.intp), np.empty(0, dtype=np.intp)
+        for _ in range(self.config.max_resample_rounds):
+            uv = np.rint(gmm.sample(2 * (wanted - len(rows)), rng) * std + mean)
+            inside = (uv[:, 0] >= 0) & (uv[:, 0] < width) & (uv[:, 1] >= 0) & (uv[:, 1] < height)
+            c, r = uv[inside, 0].astype(np.intp), uv[inside, 1].astype(np.intp)
+            keep = cloud.valid[r, c]
+            rows, cols = np.concatenate([rows, r[keep]]), np.concatenate([cols, c[keep]])
+            if len(rows) >= wanted:
+                break
+        return rows[:wanted], cols[:wanted]
+
+    def plan(self, observation: Observation, rng: np.random.Generator) -> GraspAction:
+        start = time.perf_counter()
+        cfg = self.config
+        cloud = scene_cloud(observation, cfg.sampler)
+        rows, cols = cloud.sample(cfg.num_seed_samples, rng)
+        rounds = [self.score(observation, cloud, rows, cols)]
+        for _ in range(cfg.num_iters):
+            q = rounds[-1]["q"]
+            elite = np.argsort(-q, kind="stable")[: cfg.elite_count(len(q))]
+            features = np.column_stack([cols[elite], rows[elite]]).astype(float)  # pixel centres (u, v)
+            mean, std = features.mean(axis=0), features.std(axis=0)
+            std[std == 0] = 1.0
+            gmm = fit_gmm((features - mean) / std, cfg.component_count(len(elite)), rng,
+                          reg_covar=cfg.gmm_reg_covar, max_iter=cfg.gmm_max_iter, tol=cfg.gmm_tol)
+            rows, cols = self._resample(gmm, mean, std, cloud, rng)
+            if len(rows) == 0:
+                break
+            rounds.append(self.score(observation, cloud, rows, cols))
+        candidates = {key: np.concatenate([r[key] for r in rounds]) for key in rounds[0]}
+        candidates["iteration"] = np.concatenate([np.full(len(r["q"]), i) for i, r in enumerate(rounds)])
+        best = int(np.argmax(candidates["q"]))
+        return GraspAction(
+            point=candidates["points"][best].copy(), approach=candidates["approaches"][best].copy(),
+            pixel=candidates["pixels"][best].copy(), q=float(candidates["q"][best]),
+            camera_pose=observation.camera_pose.copy(), policy=self.name, candidates=candidates,
+            info={
+                "plan_time": time.perf_counter() - start, "relaxed": cloud.relaxed, "chosen": best,
+                "evaluations": len(candidates["q"]), "round_best_q": [float(r["q"].max()) for r in rounds],
+            },
+        )
+
+
+def make_gqcnn_policy(
+    model: GraspQualityModel | str | Path | None = None, config: CEMConfig | None = None, **overrides: Any
+) -> GQCNNPolicy:
+    """Registry factory for "gqcnn": `model` is a model object (anything with `predict`), a model
+    directory (loaded on first use), or None for the shipped default (assets/models/gqcnn-compact).
+    A missing directory raises InputError."""
+    if model is None:
+        path = default_model_dir()
+        if not path.exists():
+            raise InputError(
+                f"GQ-CNN policy: no model given and the default model '{path}' is not installed; "
+                "pass model=PATH to a trained model directory"
+            )
+        model = LazyModel(path)
+    elif isinstance(model, str | Path):
+        model = LazyModel(model)
+    return GQCNNPolicy(model, config, **overrides)

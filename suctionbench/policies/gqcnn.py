@@ -23,6 +23,12 @@ Algorithm (one `plan`)
 4. Return the best grasp seen in any round (gqcnn returns the best of the last round; keeping the
    best seen can only raise the result, and equals gqcnn's whenever the last round holds it).
 
+Other departures from gqcnn, all small: mixture samples are rounded to the nearest pixel (gqcnn
+truncates, a half-pixel bias), samples off the valid pixels are redrawn rather than dropped (every
+round scores its full 50), resampled pixels must pass the seed sampler's angle limits (gqcnn
+checks only the mask and the approach angle), and a zero elite standard deviation counts as 1 px
+rather than 1e-6 (either way the samples round to the elites' common pixel).
+
 The mixture is fitted by a small EM in numpy (`fit_gmm`, no scikit-learn): centres start at
 distinct elites chosen with the policy's generator, one hard assignment to the nearest centre gives
 the first parameters, then EM runs to scikit-learn's defaults (100 iterations, tolerance 1e-3 on

@@ -285,9 +285,10 @@ def _load_ahead(load: Callable[[Any], Any], keys: list[Any]) -> Iterator[Any]:
             yield value
     finally:
         stop.set()
-        while thread.is_alive():  # unblock a worker waiting to put its last item
+        while thread.is_alive():  # unblock a worker waiting to put an item nobody will take
             with contextlib.suppress(queue.Empty):
-                results.get(timeout=0.1)
+                results.get_nowait()
+            thread.join(timeout=0.01)
 
 
 class SplitData:
@@ -307,12 +308,15 @@ class SplitData:
             rng = subset_rng or np.random.default_rng(0)
             indices = np.sort(rng.choice(indices, size=max_datapoints, replace=False))
         dps = self.reader.datapoints_per_shard
+        if self.reader.num_shards == 0 or dps is None:
+            raise InputError(f"dataset '{self.reader.directory}': no complete shards")
         shard_of = indices // dps
+        available = set(self.reader.shard_indices)
         self._local: dict[int, np.ndarray] = {}
         for shard in np.unique(shard_of).tolist():
             lo, hi = np.searchsorted(shard_of, [shard, shard + 1])
             local = indices[lo:hi] - shard * dps
-            if shard not in self.reader.shard_indices or local[-1] >= self.reader.shard_size(shard):
+            if shard not in available or local[-1] >= self.reader.shard_size(shard):
                 raise InputError(f"split '{kind}/{part}' of '{self.reader.directory}': refers to datapoints of "
                                  f"shard {shard}, which is missing or smaller (dataset incomplete?)")
             self._local[shard] = local.astype(np.int64)
@@ -366,12 +370,6 @@ class SplitData:
             raise InputError(f"split '{self.kind}/{self.part}' of '{self.reader.directory}': no datapoints")
         return NormStats(float(image.mean[0]), float(image.std()[0]), tuple(float(x) for x in pose.mean),
                          tuple(float(x) for x in pose.std()), count=pose.n)
-
-    def positive_rate(self, threshold: float) -> float:
-        """Fraction of the split's datapoints labelled positive (reads only the metric field)."""
-        positives = sum(int((self.reader.shard(s, fields=[METRIC_FIELD])[METRIC_FIELD][self._local[s]]
-                             > threshold).sum()) for s in self.shards)
-        return positives / max(self.num_datapoints, 1)
 
 
 def _concat(batches: list[Batch]) -> Batch:

@@ -1,0 +1,484 @@
+"""GQ-CNN training: gqcnn's Dex-Net 3.0 recipe in PyTorch, deterministic and resumable.
+
+Recipe (gqcnn cfg/train_dex-net_3.0.yaml): softmax cross-entropy on label = metric > 0.2, SGD with
+momentum 0.9, base learning rate 0.01 decayed by 0.95 every 0.66 epoch (staircase), L2 5e-4,
+batch 64, 25 epochs, 80/20 image-wise split, normalised inputs and Gamma / GP noise /
+symmetrisation augmentation (`suctionbench.learning.data`). gqcnn adds ``l2 * sum(tf.nn.l2_loss(w))``
+(= l2 * sum w^2 / 2) to the loss over all weights and biases; its gradient l2 * w is exactly SGD's
+``weight_decay=l2``, which is what is used here. gqcnn's learning rate is
+``base * 0.95 ** floor(examples_seen / (0.66 * num_train))``; `_StaircaseDecay` computes the same
+from the step count.
+
+Determinism. Every random draw comes from generators derived from `TrainConfig.seed` through
+``numpy.random.SeedSequence(seed).spawn``: the optional training subset, the data order (numpy),
+the weight initialisation and the augmentation (torch, CPU); nothing uses a global RNG. On the CPU
+two runs with the same seed, data and thread count give bit-identical weights. On CUDA the run uses
+bfloat16 autocast (mixed precision) and cuDNN's fastest kernels, which are not bit-reproducible.
+
+Checkpoints. After every epoch the output directory gets, each written atomically: the model
+(``model.safetensors`` + ``model.json``, usable for inference at once) and the resume state
+(``train_state.pt``: model, optimiser, scheduler, both RNG states, history, normalisation
+statistics). The validation precision-recall curve (``precision_recall.png``) is drawn at the end. `train` on a
+directory holding a resume state of the same configuration (ignoring `epochs` and `device`)
+continues after the last completed epoch and ends with the same weights an uninterrupted run
+would have; more epochs than before extend a finished run (the decay schedule does not depend on
+the epoch count). A different configuration is refused unless ``overwrite=True``.
+"""
+
+from __future__ import annotations
+
+import math
+import shlex
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+
+from suctionbench.config import to_dict
+from suctionbench.dataset.storage import SPLIT_KINDS, DatasetReader, read_card
+from suctionbench.errors import InputError
+from suctionbench.learning.checkpoint import (
+    CARD_NAME,
+    STATE_NAME,
+    WEIGHTS_NAME,
+    GQCNNModel,
+    json_safe,
+    load_train_state,
+    save_model,
+    save_train_state,
+    versions,
+)
+from suctionbench.learning.data import (
+    AUGMENT_GQCNN,
+    METRIC_FIELD,
+    AugmentConfig,
+    NormStats,
+    SplitData,
+    augment,
+    label_threshold,
+    labels_of,
+    to_tensors,
+)
+from suctionbench.learning.metrics import average_precision, plot_precision_recall, precision_recall_curve
+from suctionbench.learning.models import ARCHITECTURES, build_model, count_macs, count_parameters
+
+PR_CURVE_NAME = "precision_recall.png"
+
+EVAL_BATCH = 1024
+"""Datapoints per forward pass in validation (no gradients, so larger than the training batch)."""
+
+PROGRESS_EVERY = 10
+"""Training steps between progress reports (each report synchronises with the GPU once)."""
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Training run settings (defaults: gqcnn's Dex-Net 3.0 recipe on the dn3 network)."""
+
+    arch: str = "dn3"
+    """Network: dn3 (Dex-Net 3.0 GQ-CNN, 5.6 M parameters) or compact (36 k, CPU friendly)."""
+
+    epochs: int = 25
+    """Passes over the training split. gqcnn: 25."""
+
+    batch_size: int = 64
+    """Training datapoints per SGD step. gqcnn: 64."""
+
+    learning_rate: float = 0.01
+    """Base learning rate. gqcnn: 0.01."""
+
+    momentum: float = 0.9
+    """SGD momentum. gqcnn: 0.9."""
+
+    decay_rate: float = 0.95
+    """Factor applied to the learning rate at every decay step (staircase). gqcnn: 0.95."""
+
+    decay_epochs: float = 0.66
+    """Epochs between learning-rate decays (gqcnn ``decay_step_multiplier``): 0.66."""
+
+    weight_decay: float = 5e-4
+    """L2 coefficient on all weights and biases (gqcnn ``train_l2_regularizer``): 5e-4."""
+
+    split: str = "image_wise"
+    """Dataset split: image_wise (unseen images of known objects, gqcnn's) or object_wise (unseen objects)."""
+
+    device: str = "cpu"
+    """cpu, or cuda (bfloat16 mixed precision)."""
+
+    seed: int = 0
+    """Seed of every random draw: subset, data order, initialisation, augmentation."""
+
+    augment: AugmentConfig = field(default_factory=lambda: AUGMENT_GQCNN)
+    """Training augmentation (`AUGMENT_OFF` disables it)."""
+
+    max_train_datapoints: int | None = None
+    """Train on a random subset of at most this many training datapoints (None: all)."""
+
+    shuffle_shards: int = 4
+    """Shards pooled and shuffled together (memory ~ this x one shard, 4 MB per 1000 thumbnails)."""
+
+    label_threshold: float | None = None
+    """Label = metric > this; None: the dataset card's ``config.label_threshold`` (else 0.2)."""
+
+    def __post_init__(self) -> None:
+        def integer(value: Any, low: int) -> bool:
+            return isinstance(value, int | np.integer) and not isinstance(value, bool) and value >= low
+
+        def number(value: Any) -> bool:
+            return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+        checks = {
+            "arch": (self.arch in ARCHITECTURES, f"one of {', '.join(ARCHITECTURES)}"),
+            "epochs": (integer(self.epochs, 1), "an integer >= 1"),
+            "batch_size": (integer(self.batch_size, 1), "an integer >= 1"),
+            "learning_rate": (number(self.learning_rate) and self.learning_rate > 0, "a number > 0"),
+            "momentum": (number(self.momentum) and 0 <= self.momentum < 1, "a number in [0, 1)"),
+            "decay_rate": (number(self.decay_rate) and 0 < self.decay_rate <= 1, "a number in (0, 1]"),
+            "decay_epochs": (number(self.decay_epochs) and self.decay_epochs > 0, "a number > 0"),
+            "weight_decay": (number(self.weight_decay) and self.weight_decay >= 0, "a number >= 0"),
+            "split": (self.split in SPLIT_KINDS, f"one of {', '.join(SPLIT_KINDS)}"),
+            "device": (self.device == "cpu" or str(self.device).startswith("cuda"), "cpu or cuda"),
+            "seed": (integer(self.seed, 0), "an integer >= 0"),
+            "augment": (isinstance(self.augment, AugmentConfig), "an AugmentConfig"),
+            "max_train_datapoints": (self.max_train_datapoints is None or integer(self.max_train_datapoints, 1),
+                                     "None or an integer >= 1"),
+            "shuffle_shards": (integer(self.shuffle_shards, 1), "an integer >= 1"),
+            "label_threshold": (self.label_threshold is None or number(self.label_threshold), "None or a number"),
+        }
+        for key, (ok, need) in checks.items():
+            if not ok:
+                raise InputError(f"training config: {key} = {getattr(self, key)!r} must be {need}")
+
+
+RESUME_IGNORES = ("epochs", "device")
+"""Config fields that may differ between a checkpoint and the run resuming it."""
+
+
+@dataclass(frozen=True)
+class TrainProgress:
+    """What a progress callback receives, every `PROGRESS_EVERY` steps and at the end of each epoch."""
+
+    epoch: int
+    """Current epoch, 1-based."""
+
+    epochs: int
+    """Last epoch of the run."""
+
+    images_done: int
+    """Training images processed in this call of `train` so far."""
+
+    images_total: int
+    """Training images this call of `train` will process (epochs left x training datapoints)."""
+
+    loss: float
+    """Mean training loss of the current epoch so far."""
+
+    accuracy: float
+    """Training accuracy of the current epoch so far (on augmented inputs)."""
+
+
+class _StaircaseDecay:
+    """Learning-rate factor decay_rate ** floor(examples seen / examples per decay), as gqcnn's staircase.
+
+    A class rather than a lambda so the scheduler's state (this object's fields) can be checkpointed.
+    """
+
+    def __init__(self, batch_size: int, examples_per_decay: float, decay_rate: float):
+        self.batch_size = batch_size
+        self.examples_per_decay = examples_per_decay
+        self.decay_rate = decay_rate
+
+    def __call__(self, step: int) -> float:
+        return self.decay_rate ** math.floor(step * self.batch_size / self.examples_per_decay)
+
+
+@dataclass
+class _Session:
+    """Everything that changes during training and is checkpointed."""
+
+    network: torch.nn.Module
+    optimizer: torch.optim.Optimizer
+    scheduler: torch.optim.lr_scheduler.LambdaLR
+    shuffle_rng: np.random.Generator
+    augment_gen: torch.Generator
+    stats: NormStats
+    epoch: int = 0
+    history: list[dict[str, Any]] = field(default_factory=list)
+    train_seconds: float = 0.0
+    images_trained: int = 0
+
+    def state(self, config: TrainConfig, resume_key: dict[str, Any]) -> dict[str, Any]:
+        return {
+            "config": to_dict(config), "resume_key": resume_key, "epoch": self.epoch,
+            "model": self.network.state_dict(), "optimizer": self.optimizer.state_dict(),
+            "scheduler": self.scheduler.state_dict(), "shuffle_rng": self.shuffle_rng.bit_generator.state,
+            "augment_rng": self.augment_gen.get_state(), "stats": self.stats.to_dict(), "history": self.history,
+            "train_seconds": self.train_seconds, "images_trained": self.images_trained,
+        }
+
+    def restore(self, state: dict[str, Any]) -> None:
+        self.network.load_state_dict(state["model"])
+        self.optimizer.load_state_dict(state["optimizer"])
+        self.scheduler.load_state_dict(state["scheduler"])
+        self.shuffle_rng.bit_generator.state = state["shuffle_rng"]
+        self.augment_gen.set_state(state["augment_rng"])
+        self.epoch = int(state["epoch"])
+        self.history = list(state["history"])
+        self.train_seconds = float(state["train_seconds"])
+        self.images_trained = int(state["images_trained"])
+
+
+def _torch_seed(seq: np.random.SeedSequence) -> int:
+    return int(seq.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1))
+
+
+def _device(name: str) -> torch.device:
+    device = torch.device(name)
+    if device.type == "cuda" and not torch.cuda.is_available():
+        raise InputError(f"device '{name}': CUDA is not available on this machine (use cpu)")
+    return device
+
+
+def _resume_key(config: TrainConfig, card: dict[str, Any], reader: DatasetReader, train_data: SplitData,
+                val_data: SplitData) -> dict[str, Any]:
+    """What must match for a checkpoint to be resumed: the config (bar `RESUME_IGNORES`) and the data."""
+    settings = {k: v for k, v in to_dict(config).items() if k not in RESUME_IGNORES}
+    data = {"fingerprint": card.get("fingerprint"), "datapoints": reader.num_datapoints,
+            "num_train": train_data.num_datapoints, "num_val": val_data.num_datapoints}
+    return json_safe({"config": settings, "dataset": data})
+
+
+def _differences(old: dict[str, Any], new: dict[str, Any], prefix: str = "") -> list[str]:
+    keys = sorted(set(old) | set(new))
+    out: list[str] = []
+    for key in keys:
+        a, b = old.get(key), new.get(key)
+        if isinstance(a, dict) and isinstance(b, dict):
+            out += _differences(a, b, f"{prefix}{key}.")
+        elif a != b:
+            out.append(f"{prefix}{key}")
+    return out
+
+
+def _dataset_summary(directory: Path, card: dict[str, Any], split: str, train_data: SplitData,
+                     val_data: SplitData) -> dict[str, Any]:
+    """The dataset facts a model card carries: where it came from and what camera and cup it assumes."""
+    config = card.get("config") if isinstance(card.get("config"), dict) else {}
+    label = config.get("label") if isinstance(config.get("label"), dict) else {}
+    return {
+        "path": str(directory.resolve()), "fingerprint": card.get("fingerprint"), "datapoints": card.get("datapoints"),
+        "positive_rate": card.get("positive_rate"), "camera": card.get("camera"),
+        "cup": card.get("cup", label.get("cup")), "noise": config.get("noise"), "seed": config.get("seed"),
+        "objects": len(card.get("objects", [])) if isinstance(card.get("objects"), list) else None,
+        "split": split, "num_train": train_data.num_datapoints, "num_val": val_data.num_datapoints,
+        "suctionbench_version": card.get("suctionbench_version"),
+    }
+
+
+def _autocast(device: torch.device):
+    """bfloat16 autocast on CUDA (no loss scaling needed, unlike float16); a no-op context on the CPU."""
+    return torch.autocast(device.type, dtype=torch.bfloat16, enabled=device.type == "cuda")
+
+
+def evaluate(network: torch.nn.Module, data: SplitData, stats: NormStats, threshold: float,
+             device: torch.device) -> dict[str, Any]:
+    """Loss, accuracy (q > 0.5), AP and the scores / labels of a split, in index order, no augmentation."""
+    network.eval()
+    scores, labels, loss_sum = [], [], 0.0
+    with torch.no_grad():
+        for batch in data.batches(EVAL_BATCH):
+            images, poses = stats.normalise(*to_tensors(batch, device))
+            target = torch.from_numpy(labels_of(batch.metric, threshold)).to(device)
+            with _autocast(device):
+                logits = network(images, poses)
+            logits = logits.float()
+            loss_sum += float(F.cross_entropy(logits, target, reduction="sum"))
+            scores.append(torch.softmax(logits, dim=1)[:, 1].cpu().numpy())
+            labels.append(target.cpu().numpy())
+    q = np.concatenate(scores) if scores else np.zeros(0)
+    y = np.concatenate(labels) if labels else np.zeros(0, dtype=np.int64)
+    n = max(len(y), 1)
+    return {"loss": loss_sum / n, "accuracy": float(np.mean((q > 0.5) == (y == 1))) if len(y) else math.nan,
+            "ap": average_precision(y, q), "positive_rate": float(np.mean(y)) if len(y) else math.nan,
+            "scores": q, "labels": y}
+
+
+def _train_epoch(session: _Session, data: SplitData, config: TrainConfig, threshold: float, device: torch.device,
+                 report: Callable[[int, float, float], None]) -> dict[str, float]:
+    """One pass over the training split; returns mean loss, accuracy, images and seconds."""
+    network = session.network
+    network.train()
+    loss_sum = torch.zeros((), device=device)
+    correct = torch.zeros((), device=device, dtype=torch.int64)
+    seen = 0
+    start = time.perf_counter()
+    batches = data.batches(config.batch_size, session.shuffle_rng, config.shuffle_shards)
+    for step, batch in enumerate(batches, start=1):
+        images, poses = to_tensors(batch, device)
+        target = torch.from_numpy(labels_of(batch.metric, threshold)).to(device)
+        if config.augment.enabled:
+            images, poses = augment(images, poses, session.augment_gen, config.augment)
+        images, poses = session.stats.normalise(images, poses)
+        with _autocast(device):
+            logits = network(images, poses)
+        loss = F.cross_entropy(logits.float(), target)
+        session.optimizer.zero_grad(set_to_none=True)
+        loss.backward()
+        session.optimizer.step()
+        session.scheduler.step()
+        loss_sum += loss.detach() * len(batch)
+        correct += (logits.detach().argmax(dim=1) == target).sum()
+        seen += len(batch)
+        if step % PROGRESS_EVERY == 0:
+            report(seen, float(loss_sum) / seen, int(correct) / seen)
+    seconds = time.perf_counter() - start
+    loss_mean, accuracy = float(loss_sum) / max(seen, 1), int(correct) / max(seen, 1)
+    report(seen, loss_mean, accuracy)
+    return {"loss": loss_mean, "accuracy": accuracy, "images": seen, "seconds": seconds}
+
+
+def _remove_outputs(out_dir: Path) -> None:
+    for name in (STATE_NAME, WEIGHTS_NAME, CARD_NAME, PR_CURVE_NAME):
+        (out_dir / name).unlink(missing_ok=True)
+
+
+def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | None = None,
+          progress: Callable[[TrainProgress], None] | None = None, *, command: str | None = None,
+          overwrite: bool = False) -> dict[str, Any]:
+    """Train a GQ-CNN on a dataset directory, writing the model and checkpoints to `out_dir`; returns metrics.
+
+    Resumes from ``out_dir/train_state.pt`` when its configuration matches (module docstring);
+    `overwrite` discards an existing run instead. `command` is recorded in the model card (default:
+    this process's command line). Bad inputs (missing dataset, missing split, unknown arch,
+    unavailable device, conflicting checkpoint) raise InputError before any training.
+    """
+    config = config or TrainConfig()
+    dataset_dir, out_dir = Path(dataset_dir), Path(out_dir)
+    device = _device(config.device)
+    reader = DatasetReader(dataset_dir)
+    card = read_card(dataset_dir)
+    threshold = config.label_threshold if config.label_threshold is not None else label_threshold(card)
+    seq_subset, seq_shuffle, seq_init, seq_augment = np.random.SeedSequence(config.seed).spawn(4)
+    train_data = SplitData(dataset_dir, config.split, "train", max_datapoints=config.max_train_datapoints,
+                           subset_rng=np.random.default_rng(seq_subset), reader=reader)
+    val_data = SplitData(dataset_dir, config.split, "val", reader=reader)
+    if train_data.num_datapoints == 0:
+        raise InputError(f"dataset '{dataset_dir}': split {config.split} has no training datapoints")
+    resume_key = _resume_key(config, card, reader, train_data, val_data)
+
+    if out_dir.exists() and not out_dir.is_dir():
+        raise InputError(f"output '{out_dir}': exists and is not a directory")
+    if overwrite:
+        _remove_outputs(out_dir)
+    saved = load_train_state(out_dir)
+    if saved is not None and saved.get("resume_key") != resume_key:
+        changed = ", ".join(_differences(saved.get("resume_key") or {}, resume_key)) or "format"
+        raise InputError(f"output '{out_dir}': holds a training run with a different configuration or dataset "
+                         f"(differs in: {changed}); use another output directory or overwrite it (--overwrite)")
+
+    stats = NormStats.from_dict(saved["stats"]) if saved is not None else train_data.compute_stats()
+    network = build_model(config.arch, torch.Generator().manual_seed(_torch_seed(seq_init))).to(device)
+    optimizer = torch.optim.SGD(network.parameters(), lr=config.learning_rate, momentum=config.momentum,
+                                weight_decay=config.weight_decay)
+    decay = _StaircaseDecay(config.batch_size, config.decay_epochs * train_data.num_datapoints, config.decay_rate)
+    session = _Session(network, optimizer, torch.optim.lr_scheduler.LambdaLR(optimizer, decay),
+                       np.random.default_rng(seq_shuffle), torch.Generator().manual_seed(_torch_seed(seq_augment)),
+                       stats)
+    resumed_from = 0
+    if saved is not None:
+        session.restore(saved)
+        resumed_from = session.epoch
+
+    base_card = {
+        "arch": config.arch, "parameters": count_parameters(network), "macs_per_grasp": count_macs(network),
+        "inputs": {"images": "(N, 32, 32) float32 depth thumbnails in metres, grasp at the centre, approach's "
+                             "image pointing down the middle column",
+                   "poses": "(N, 2) [gripper depth (m), approach angle to the table normal (rad, >= 0)]"},
+        "output": "probability that the grasp succeeds: softmax of the logits, column 1",
+        "label": {"metric": METRIC_FIELD, "threshold": threshold, "positive": "metric > threshold"},
+        "dataset": _dataset_summary(dataset_dir, card, config.split, train_data, val_data),
+        "command": command if command is not None else shlex.join(sys.argv),
+        "versions": versions(),
+    }
+    epochs_left = max(config.epochs - session.epoch, 0)
+    images_total = epochs_left * train_data.num_datapoints
+    run_images, run_seconds = 0, 0.0
+    evaluation: dict[str, Any] | None = None
+    while session.epoch < config.epochs:
+        epoch = session.epoch + 1
+
+        def report(done: int, loss: float, acc: float, epoch: int = epoch, before: int = run_images) -> None:
+            if progress is not None:
+                progress(TrainProgress(epoch, config.epochs, before + done, images_total, loss, acc))
+
+        lr = optimizer.param_groups[0]["lr"]
+        result = _train_epoch(session, train_data, config, threshold, device, report)
+        run_images += result["images"]
+        run_seconds += result["seconds"]
+        session.train_seconds += result["seconds"]
+        session.images_trained += result["images"]
+        evaluation = evaluate(network, val_data, stats, threshold, device)
+        session.epoch = epoch
+        session.history.append(json_safe({
+            "epoch": epoch, "lr": lr, "train_loss": result["loss"], "train_accuracy": result["accuracy"],
+            "val_loss": evaluation["loss"], "val_accuracy": evaluation["accuracy"], "val_ap": evaluation["ap"],
+            "train_seconds": result["seconds"], "train_images_per_s": result["images"] / max(result["seconds"], 1e-9),
+        }))
+        _checkpoint(out_dir, session, config, resume_key, base_card, evaluation, device)
+
+    if evaluation is None and not (out_dir / CARD_NAME).is_file():  # resumed a finished run whose files are gone
+        evaluation = evaluate(network, val_data, stats, threshold, device)
+        _checkpoint(out_dir, session, config, resume_key, base_card, evaluation, device)
+    if evaluation is not None:
+        _plot_pr_curve(out_dir / PR_CURVE_NAME, evaluation, f"{config.arch}, {config.split} validation, "
+                                                            f"epoch {session.epoch}")
+    last = session.history[-1]
+    return json_safe({
+        "out": str(out_dir), "arch": config.arch, "split": config.split, "epochs": session.epoch,
+        "resumed_from_epoch": resumed_from, "epochs_trained_now": session.epoch - resumed_from,
+        "num_train": train_data.num_datapoints, "num_val": val_data.num_datapoints, "label_threshold": threshold,
+        "train_loss": last["train_loss"], "train_accuracy": last["train_accuracy"],
+        "val_loss": last["val_loss"], "val_accuracy": last["val_accuracy"], "val_ap": last["val_ap"],
+        "train_seconds": round(session.train_seconds, 3),
+        "train_images_per_s": round(run_images / run_seconds, 1) if run_seconds > 0 else
+        round(session.images_trained / max(session.train_seconds, 1e-9), 1),
+        "parameters": base_card["parameters"], "macs_per_grasp": base_card["macs_per_grasp"],
+        "model": str(out_dir / CARD_NAME), "pr_curve": str(out_dir / PR_CURVE_NAME), "device": str(device),
+    })
+
+
+def _checkpoint(out_dir: Path, session: _Session, config: TrainConfig, resume_key: dict[str, Any],
+                base_card: dict[str, Any], evaluation: dict[str, Any], device: torch.device) -> None:
+    """Write the model (weights, then card) and then the resume state."""
+    last = session.history[-1]
+    card = dict(base_card)
+    card["training"] = {
+        "config": to_dict(config), "epochs_completed": session.epoch,
+        "status": "complete" if session.epoch >= config.epochs else "in progress",
+        "device": str(device), "mixed_precision": "bfloat16" if device.type == "cuda" else None,
+        "train_seconds": round(session.train_seconds, 3), "images_trained": session.images_trained,
+        "train_images_per_s": round(session.images_trained / max(session.train_seconds, 1e-9), 1),
+    }
+    card["metrics"] = {key: last[key] for key in ("train_loss", "train_accuracy", "val_loss", "val_accuracy", "val_ap")}
+    card["metrics"]["val_positive_rate"] = evaluation["positive_rate"]
+    card["history"] = session.history
+    save_model(out_dir, GQCNNModel(session.network, session.stats, card, device=str(device)))
+    save_train_state(out_dir, session.state(config, resume_key))
+
+
+def _plot_pr_curve(path: Path, evaluation: dict[str, Any], title: str) -> None:
+    """The validation PR curve as a PNG; skipped when the split has no positives (no curve exists).
+
+    Drawn once per `train` call, after the last epoch: matplotlib takes ~0.4 s a figure, more than
+    an epoch of a small dataset.
+    """
+    precision, recall, _ = precision_recall_curve(evaluation["labels"], evaluation["scores"])
+    if len(recall) and np.isfinite(recall[-1]):
+        plot_precision_recall(path, precision, recall, ap=evaluation["ap"], positive_rate=evaluation["positive_rate"],
+                              title=title)

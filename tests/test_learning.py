@@ -1,0 +1,424 @@
+"""GQ-CNN learning: architectures, streaming data, augmentation geometry, training, checkpoints, CLI.
+
+Everything runs on a tiny synthetic dataset (256 thumbnails: positives are a flat disc at the
+grasp, negatives a ridge through it) with the compact net, so the module takes seconds.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+import torch
+from typer.testing import CliRunner
+
+from suctionbench.cli import app
+from suctionbench.dataset.storage import DatasetWriter, read_split, write_splits
+from suctionbench.errors import InputError
+from suctionbench.learning.checkpoint import CARD_NAME, STATE_NAME, WEIGHTS_NAME, GQCNNModel, load_model, save_model
+from suctionbench.learning.data import (
+    AUGMENT_OFF,
+    AugmentConfig,
+    NormStats,
+    SplitData,
+    augment,
+    symmetrize,
+)
+from suctionbench.learning.metrics import average_precision, precision_recall_curve
+from suctionbench.learning.models import (
+    LRN_ALPHA_TF,
+    LRN_BETA,
+    LRN_BIAS,
+    LRN_RADIUS,
+    build_model,
+    count_macs,
+    count_parameters,
+    tf_lrn_to_torch,
+)
+from suctionbench.learning.train import TrainConfig, train
+from suctionbench.sensing.thumbnails import extract_thumbnails
+
+N_SYNTH = 256
+"""Datapoints of the synthetic dataset (4 shards of 64)."""
+
+FAST = {"arch": "compact", "augment": AUGMENT_OFF}
+"""Training settings shared by the quick runs."""
+
+
+@pytest.fixture(autouse=True)
+def one_thread():
+    """Train on one thread: bit-reproducible timings aside, a loaded CI machine makes torch's thread
+    pool spin, which slows the tiny compact steps by an order of magnitude."""
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(before)
+
+
+# ----------------------------------------------------------------------------------------------
+# synthetic dataset
+
+
+def synthetic_thumbnails(n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Thumbnails (n, 32, 32) in metres, hand poses (n, 7) and metric (n,): even i positive (flat disc
+    of radius 6-9 px at the grasp on a table at 0.6 m), odd i negative (a ridge through the grasp)."""
+    yy, xx = np.mgrid[0:32, 0:32] - 15.5
+    positive = np.arange(n) % 2 == 0
+    top = rng.uniform(0.56, 0.59, n)
+    images = np.empty((n, 32, 32), np.float32)
+    for i in range(n):  # a few hundred tiny images
+        if positive[i]:
+            image = np.where(xx**2 + yy**2 <= rng.uniform(6, 9) ** 2, top[i], 0.6)
+        else:
+            theta = rng.uniform(0, np.pi)
+            image = np.minimum(top[i] + 0.004 * np.abs(xx * np.cos(theta) + yy * np.sin(theta)), 0.6)
+        images[i] = image + rng.normal(0, 0.0005, (32, 32))
+    poses = np.zeros((n, 7), np.float32)
+    poses[:, 0], poses[:, 1] = rng.uniform(100, 300, n), rng.uniform(100, 400, n)
+    poses[:, 2], poses[:, 3], poses[:, 6] = top, rng.uniform(0, 0.6, n), 1.0
+    metric = np.where(positive, rng.uniform(0.5, 1.0, n), rng.uniform(0.0, 0.15, n)).astype(np.float32)
+    return images, poses, metric
+
+
+def write_synthetic(directory, n: int = N_SYNTH, per_shard: int = 64, seed: int = 0) -> None:
+    rng = np.random.default_rng(seed)
+    images, poses, metric = synthetic_thumbnails(n, rng)
+    objects = (np.arange(n) // 32).astype(np.int32)
+    writer = DatasetWriter(directory, per_shard)
+    for start in range(0, n, per_shard):
+        part = slice(start, start + per_shard)
+        k = len(metric[part])
+        writer.write_shard(start // per_shard, {
+            "depth_ims_tf_table": images[part, ..., None], "hand_poses": poses[part],
+            "robust_suction_wrench_resistance": metric[part], "object_labels": objects[part],
+            "pose_labels": np.zeros(k, np.int32), "image_labels": np.arange(start, start + k, dtype=np.int32),
+            "grasp_labels": np.zeros(k, np.int32), "seal_flags": np.ones(k, np.uint8),
+            "wrench_resistance": (metric[part] > 0.2).astype(np.uint8),
+        })
+    writer.write_card({
+        "config": {"label_threshold": 0.2, "label": {"cup": {"name": "default", "radius": 0.0075}}},
+        "camera": {"name": "primesense", "fx": 525.0, "fy": 525.0}, "fingerprint": "synthetic", "datapoints": n,
+        "positive_rate": float((metric > 0.2).mean()),
+    })
+    write_splits(directory, np.arange(n), objects, seed=seed)
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory):
+    directory = tmp_path_factory.mktemp("learning") / "synthetic"
+    write_synthetic(directory)
+    return directory
+
+
+def train_arrays(dataset, kind: str = "image_wise") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Images, network poses and metric of a split, read directly (the reference for the streaming reader)."""
+    data = SplitData(dataset, kind, "train")
+    parts = [data.load_shard(s) for s in data.shards]
+    return tuple(np.concatenate([getattr(p, name) for p in parts]) for name in ("images", "poses", "metric"))
+
+
+def weights_of(directory) -> dict[str, torch.Tensor]:
+    return load_model(directory).network.state_dict()
+
+
+# ----------------------------------------------------------------------------------------------
+# networks
+
+
+def test_dn3_shapes_and_parameter_count():
+    # conv1_1 7*7*1*64 + 64 = 3,200; conv1_2 5*5*64*64 + 64 = 102,464; conv2_1 = conv2_2 = 3*3*64*64 + 64 = 36,928;
+    # fc3 (8*8*64)*1024 + 1024 = 4,195,328; pc1 2*128 + 128 = 384; fc4 (1024 + 128)*1024 + 1024 = 1,180,672;
+    # fc5 1024*2 + 2 = 2,050. Sum: 5,557,954.
+    model = build_model("dn3", torch.Generator().manual_seed(0))
+    assert count_parameters(model) == 3_200 + 102_464 + 2 * 36_928 + 4_195_328 + 384 + 1_180_672 + 2_050 == 5_557_954
+    assert model(torch.zeros(5, 1, 32, 32), torch.zeros(5, 2)).shape == (5, 2)
+    # SAME padding keeps 32 -> 32 -> pool 16 -> 16 -> pool 8; MACs: convs at those sizes + the fc layers.
+    convs = 32 * 32 * 49 * 64 + 32 * 32 * 25 * 64 * 64 + 2 * 16 * 16 * 9 * 64 * 64
+    assert count_macs(model) == convs + 4096 * 1024 + 2 * 128 + 1152 * 1024 + 1024 * 2
+
+
+def test_compact_shapes_and_parameter_count():
+    # conv1 5*5*16 + 16 = 416; conv2 = conv3 = 3*3*16*16 + 16 = 2,320; fc3 (5*5*16)*64 + 64 = 25,664;
+    # pc1 2*16 + 16 = 48; fc4 (64 + 16)*64 + 64 = 5,184; fc5 64*2 + 2 = 130. Sum: 36,082.
+    model = build_model("compact")
+    assert count_parameters(model) == 416 + 2 * 2_320 + 25_664 + 48 + 5_184 + 130 == 36_082
+    assert model(torch.zeros(3, 1, 32, 32), torch.zeros(3, 2)).shape == (3, 2)
+    assert count_macs(model) < count_macs(build_model("dn3")) / 100
+
+
+def test_initialisation_is_seeded_truncated_he():
+    a = build_model("dn3", torch.Generator().manual_seed(3))
+    b = build_model("dn3", torch.Generator().manual_seed(3))
+    for (name, pa), pb in zip(a.named_parameters(), b.parameters(), strict=True):
+        assert torch.equal(pa, pb), name
+    weight = a.image_stream.conv1_2[0].weight  # fan_in 5*5*64
+    std = math.sqrt(2.0 / 1600)
+    assert weight.abs().max() <= 2 * std + 1e-7
+    assert 0.8 * std < weight.std() < std  # a normal cut at 2 sigma has std 0.88 sigma
+    assert torch.count_nonzero(a.merge.fc5.bias) == 0
+
+
+def test_lrn_matches_tensorflow_formula():
+    x = torch.randn(2, 9, 4, 4, generator=torch.Generator().manual_seed(0)) * 30  # large enough that LRN bites
+    got = tf_lrn_to_torch(LRN_RADIUS, LRN_ALPHA_TF, LRN_BETA, LRN_BIAS)(x)
+    sq = x.numpy().astype(np.float64) ** 2
+    want = np.empty_like(sq)
+    for c in range(9):  # tf.nn.local_response_normalization, written out
+        window = sq[:, max(0, c - LRN_RADIUS):c + LRN_RADIUS + 1].sum(axis=1)
+        want[:, c] = x.numpy()[:, c] / (LRN_BIAS + LRN_ALPHA_TF * window) ** LRN_BETA
+    np.testing.assert_allclose(got.numpy(), want, rtol=1e-5)
+    assert not np.allclose(want, x.numpy(), rtol=1e-3)
+
+
+def test_unknown_arch_is_input_error():
+    with pytest.raises(InputError, match="architecture 'resnet'"):
+        build_model("resnet")
+    with pytest.raises(InputError, match="arch"):
+        TrainConfig(arch="resnet")
+
+
+# ----------------------------------------------------------------------------------------------
+# data
+
+
+def test_streaming_covers_the_split_once_in_shuffled_order(dataset):
+    data = SplitData(dataset, "image_wise", "train")
+    images, _, _ = train_arrays(dataset)
+    assert data.num_datapoints == len(images) == len(read_split(dataset, "image_wise", "train"))
+    batches = list(data.batches(50, np.random.default_rng(0), shuffle_shards=2))
+    assert [len(b) for b in batches[:-1]] == [50] * (len(batches) - 1)
+    streamed = np.concatenate([b.images for b in batches])
+    assert len(streamed) == len(images)
+    key = lambda arr: arr.reshape(len(arr), -1)[:, :4].tolist()  # noqa: E731 - rows as sortable keys
+    assert sorted(key(streamed)) == sorted(key(images))  # every datapoint exactly once
+    assert key(streamed) != key(images)  # ... not in index order
+    in_order = np.concatenate([b.images for b in data.batches(50)])
+    np.testing.assert_array_equal(in_order, images)
+
+
+def test_normalisation_statistics(dataset):
+    images, poses, _ = train_arrays(dataset)
+    stats = SplitData(dataset, "image_wise", "train").compute_stats()
+    assert stats.count == len(images)
+    assert stats.image_mean == pytest.approx(images.astype(np.float64).mean(), rel=1e-12)
+    assert stats.image_std == pytest.approx(images.astype(np.float64).std(), rel=1e-9)
+    np.testing.assert_allclose(stats.pose_mean, poses.astype(np.float64).mean(axis=0), rtol=1e-12)
+    np.testing.assert_allclose(stats.pose_std, poses.astype(np.float64).std(axis=0), rtol=1e-9)
+    assert NormStats.from_dict(stats.to_dict()) == stats
+
+
+def test_subset_is_seeded(dataset):
+    a = SplitData(dataset, "object_wise", "train", max_datapoints=40, subset_rng=np.random.default_rng(1))
+    b = SplitData(dataset, "object_wise", "train", max_datapoints=40, subset_rng=np.random.default_rng(1))
+    assert a.num_datapoints == 40
+    np.testing.assert_array_equal(np.concatenate([x.images for x in a.batches(64)]),
+                                  np.concatenate([x.images for x in b.batches(64)]))
+
+
+def scene_depth(height: int = 220, width: int = 260) -> np.ndarray:
+    """A depth image with no symmetry: a tilted table with two bumps of different sizes."""
+    v, u = np.mgrid[0:height, 0:width].astype(np.float64)
+    depth = 0.65 + 0.0004 * u - 0.0002 * v
+    depth -= 0.03 * np.exp(-((u - 140) ** 2 + (v - 100) ** 2) / (2 * 12**2))
+    depth -= 0.015 * np.exp(-((u - 110) ** 2 + (v - 130) ** 2) / (2 * 5**2))
+    return depth.astype(np.float32)
+
+
+@pytest.mark.parametrize("mirror", ["columns", "rows"])
+@pytest.mark.parametrize(("flip_rows", "flip_cols"), [(False, False), (False, True), (True, False), (True, True)])
+def test_symmetrisation_equals_thumbnail_of_mirrored_scene(mirror, flip_rows, flip_cols):
+    """Flipping a thumbnail is what `extract_thumbnails` cuts from the mirrored (or the same) scene, and the
+    signed angle is negated exactly when the thumbnail's down axis then points against the approach."""
+    depth = scene_depth()
+    height, width = depth.shape
+    pixel, theta, tilt = np.array([127.3, 109.6]), 0.7, 0.4  # grasp (u, v), approach image angle, tilt
+    thumb = extract_thumbnails(depth, pixel[None], np.array([theta]))[0]
+    got, angle = symmetrize(torch.from_numpy(thumb)[None, None], torch.tensor([tilt]),
+                            torch.tensor([flip_rows]), torch.tensor([flip_cols]))
+
+    # An odd number of flips is a mirror image of the scene; the grasp and its approach mirror with it.
+    mirrored = flip_rows != flip_cols
+    scene, grasp, approach = depth, pixel, theta
+    if mirrored and mirror == "columns":
+        scene, grasp, approach = depth[:, ::-1], np.array([width - 1 - pixel[0], pixel[1]]), math.pi - theta
+    elif mirrored:
+        scene, grasp, approach = depth[::-1], np.array([pixel[0], height - 1 - pixel[1]]), -theta
+    # Flipped rows: the thumbnail's down axis points against the (mirrored) approach's image.
+    axis = approach + math.pi if flip_rows else approach
+    want = extract_thumbnails(np.ascontiguousarray(scene), grasp[None], np.array([axis]))[0]
+    np.testing.assert_allclose(got[0, 0].numpy(), want, atol=2e-6)
+    assert not np.allclose(want, thumb, atol=1e-4) or not (flip_rows or flip_cols)
+    assert float(angle[0]) == pytest.approx(-tilt if flip_rows else tilt)
+
+
+def test_augmentation_signs_are_per_sample_and_reproducible():
+    thumb = torch.from_numpy(extract_thumbnails(scene_depth(), np.array([[127.3, 109.6]]), np.array([0.7]))[0])
+    images = thumb.expand(64, 1, 32, 32).clone()
+    poses = torch.stack([torch.full((64,), 0.6), torch.linspace(0.1, 0.5, 64)], dim=1)
+    config = AugmentConfig(noise=False, symmetrize=True)
+    out, out_poses = augment(images, poses, torch.Generator().manual_seed(5), config)
+    rows_flipped = torch.tensor([torch.equal(o[0], thumb.flip(0)) or torch.equal(o[0], thumb.flip(0).flip(1))
+                                 for o in out])
+    np.testing.assert_array_equal(out_poses[:, 1].numpy(),
+                                  torch.where(rows_flipped, -poses[:, 1], poses[:, 1]).numpy())
+    assert 10 < int(rows_flipped.sum()) < 54  # both signs in one batch (gqcnn flipped whole batches)
+    again, _ = augment(images, poses, torch.Generator().manual_seed(5), config)
+    assert torch.equal(out, again)
+    noisy, noisy_poses = augment(images, poses, torch.Generator().manual_seed(5), AugmentConfig(symmetrize=False))
+    assert torch.equal(noisy_poses, poses) and not torch.equal(noisy, images)
+    assert (noisy - images).abs().max() < 0.1  # Gamma ~3 % of 0.6 m plus a few mm of field
+
+
+# ----------------------------------------------------------------------------------------------
+# metrics
+
+
+def test_average_precision_by_hand():
+    labels, scores = np.array([1, 0, 1, 0]), np.array([0.9, 0.8, 0.7, 0.1])
+    assert average_precision(labels, scores) == pytest.approx(0.5 * 1 + 0.5 * 2 / 3)
+    precision, recall, thresholds = precision_recall_curve(np.array([1, 0, 1]), np.array([0.5, 0.5, 0.2]))
+    np.testing.assert_allclose(precision, [0.5, 2 / 3])  # the tie is one operating point
+    np.testing.assert_allclose(recall, [0.5, 1.0])
+    np.testing.assert_allclose(thresholds, [0.5, 0.2])
+    assert math.isnan(average_precision(np.zeros(3), np.ones(3)))
+
+
+# ----------------------------------------------------------------------------------------------
+# training
+
+
+def test_compact_overfits_the_synthetic_set(dataset, tmp_path):
+    metrics = train(dataset, tmp_path, TrainConfig(epochs=20, **FAST))
+    assert metrics["epochs"] == 20 and metrics["num_train"] + metrics["num_val"] == N_SYNTH
+    model = load_model(tmp_path)
+    images, poses, metric = train_arrays(dataset)
+    accuracy = np.mean((model.predict(images, poses) > 0.5) == (metric > 0.2))
+    assert accuracy >= 0.99
+    assert metrics["val_ap"] > 0.9
+    card = json.loads((tmp_path / CARD_NAME).read_text())
+    assert card["training"]["status"] == "complete" and len(card["history"]) == 20
+    assert card["dataset"]["camera"]["name"] == "primesense" and card["dataset"]["cup"]["name"] == "default"
+    assert card["label"]["threshold"] == 0.2 and card["versions"]["torch"] == torch.__version__
+    assert (tmp_path / "precision_recall.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def _strip_timing(metrics: dict) -> dict:
+    """Metrics without wall-clock figures and output paths, which differ between equal runs."""
+    return {k: v for k, v in metrics.items()
+            if "seconds" not in k and "per_s" not in k and k not in ("out", "model", "pr_curve")}
+
+
+def test_same_seed_same_model(dataset, tmp_path):
+    config = TrainConfig(arch="compact", epochs=1, seed=7)  # augmentation on: noise and flips are seeded too
+    first, second = train(dataset, tmp_path / "a", config), train(dataset, tmp_path / "b", config)
+    assert _strip_timing(first) == _strip_timing(second)
+    for (name, a), b in zip(weights_of(tmp_path / "a").items(), weights_of(tmp_path / "b").values(), strict=True):
+        assert torch.equal(a, b), name
+    train(dataset, tmp_path / "c", TrainConfig(arch="compact", epochs=1, seed=8))
+    key = "merge.fc5.weight"
+    assert not torch.equal(weights_of(tmp_path / "a")[key], weights_of(tmp_path / "c")[key])
+
+
+def test_resume_equals_uninterrupted_run(dataset, tmp_path):
+    config = TrainConfig(arch="compact", epochs=3, seed=2, shuffle_shards=2)
+    straight = train(dataset, tmp_path / "straight", config)
+    train(dataset, tmp_path / "resumed", TrainConfig(arch="compact", epochs=1, seed=2, shuffle_shards=2))
+    resumed = train(dataset, tmp_path / "resumed", config)
+    assert resumed["resumed_from_epoch"] == 1 and resumed["epochs_trained_now"] == 2
+    assert _strip_timing({**straight, "resumed_from_epoch": 1, "epochs_trained_now": 2}) == _strip_timing(resumed)
+    for (name, a), b in zip(weights_of(tmp_path / "straight").items(), weights_of(tmp_path / "resumed").values(),
+                            strict=True):
+        assert torch.equal(a, b), name
+    done = train(dataset, tmp_path / "resumed", config)  # nothing left to do
+    assert done["epochs_trained_now"] == 0 and done["val_accuracy"] == resumed["val_accuracy"]
+    with pytest.raises(InputError, match="differs in: config.learning_rate"):
+        train(dataset, tmp_path / "resumed", TrainConfig(arch="compact", epochs=3, seed=2, learning_rate=0.1))
+
+
+def test_learning_rate_staircase(dataset, tmp_path):
+    # 205 training datapoints, batch 64: 4 steps an epoch; decay every 0.5 * 205 = 102.5 examples seen.
+    train(dataset, tmp_path, TrainConfig(epochs=2, decay_epochs=0.5, decay_rate=0.5, **FAST))
+    history = json.loads((tmp_path / CARD_NAME).read_text())["history"]
+    assert [h["lr"] for h in history] == [0.01, 0.01 * 0.5 ** math.floor(4 * 64 / 102.5)]
+
+
+# ----------------------------------------------------------------------------------------------
+# checkpoints
+
+
+def test_checkpoint_round_trip(tmp_path):
+    rng = np.random.default_rng(0)
+    stats = NormStats(0.58, 0.01, (0.58, 0.3), (0.01, 0.2), count=10)
+    model = GQCNNModel(build_model("compact", torch.Generator().manual_seed(1)), stats, {"arch": "compact"})
+    images = rng.uniform(0.55, 0.6, (300, 32, 32)).astype(np.float32)
+    poses = np.column_stack([rng.uniform(0.55, 0.6, 300), rng.uniform(0, 0.6, 300)]).astype(np.float32)
+    before = model.predict(images, poses, batch_size=128)
+    save_model(tmp_path, model)
+    loaded = load_model(tmp_path)
+    after = loaded.predict(images[..., None], poses)
+    np.testing.assert_array_equal(before, after)
+    assert before.shape == (300,) and ((before >= 0) & (before <= 1)).all()
+    assert loaded.card["normalisation"] == stats.to_dict() and loaded.arch == "compact"
+
+
+def test_bad_inputs(dataset, tmp_path):
+    with pytest.raises(InputError, match="not a directory"):
+        train(tmp_path / "missing", tmp_path / "out", TrainConfig(**FAST))
+    with pytest.raises(InputError, match="not a directory"):
+        load_model(tmp_path / "missing")
+    with pytest.raises(InputError, match="device"):
+        TrainConfig(device="tpu")
+
+    stats = NormStats(0.58, 0.01, (0.58, 0.3), (0.01, 0.2))
+    model = GQCNNModel(build_model("compact"), stats, {"arch": "compact"})
+    save_model(tmp_path / "m", model)
+    with pytest.raises(InputError, match="images: shape"):
+        load_model(tmp_path / "m").predict(np.zeros((2, 16, 16), np.float32), np.zeros((2, 2)))
+    with pytest.raises(InputError, match="poses: shape"):
+        load_model(tmp_path / "m").predict(np.zeros((2, 32, 32), np.float32), np.zeros((3, 2)))
+    weights = tmp_path / "m" / WEIGHTS_NAME
+    data = weights.read_bytes()
+    weights.write_bytes(data[: len(data) // 2])
+    with pytest.raises(InputError, match="sha256 does not match"):
+        load_model(tmp_path / "m")
+    (tmp_path / "m" / CARD_NAME).write_text("{not json")
+    with pytest.raises(InputError, match="malformed JSON"):
+        load_model(tmp_path / "m")
+
+    out = tmp_path / "run"
+    train(dataset, out, TrainConfig(epochs=1, **FAST))
+    (out / STATE_NAME).write_bytes(b"garbage")
+    with pytest.raises(InputError, match="training checkpoint"):
+        train(dataset, out, TrainConfig(epochs=2, **FAST))
+    assert train(dataset, out, TrainConfig(epochs=1, **FAST), overwrite=True)["epochs_trained_now"] == 1
+
+
+# ----------------------------------------------------------------------------------------------
+# CLI
+
+
+def test_cli_train_and_show(dataset, tmp_path):
+    runner = CliRunner()
+    out = tmp_path / "model"
+    result = runner.invoke(app, ["train", "--dataset", str(dataset), "--out", str(out), "--arch", "compact",
+                                 "--epochs", "1", "--seed", "3", "--no-augment", "--json"])
+    assert result.exit_code == 0, result.output
+    trained = json.loads(result.stdout.strip().splitlines()[-1])
+    assert trained["ok"] and trained["epochs"] == 1 and trained["arch"] == "compact"
+    card = json.loads((out / CARD_NAME).read_text())
+    assert "train" in card["command"] and "--seed 3" in card["command"]
+
+    result = runner.invoke(app, ["model", "show", str(out), "--json"])
+    assert result.exit_code == 0, result.output
+    shown = json.loads(result.stdout.strip().splitlines()[-1])
+    assert shown["arch"] == "compact" and shown["parameters"] == 36_082
+    assert shown["val_accuracy"] == trained["val_accuracy"]
+
+    result = runner.invoke(app, ["train", "--dataset", str(tmp_path / "nope"), "--out", str(out), "--json"])
+    assert result.exit_code == 2 and "not a directory" in json.loads(result.stdout.strip().splitlines()[-1])["error"]
+    result = runner.invoke(app, ["train", "--dataset", str(dataset), "--out", str(out), "--arch", "vgg", "--json"])
+    assert result.exit_code == 2
+    result = runner.invoke(app, ["model", "show", str(tmp_path / "nope"), "--json"])
+    assert result.exit_code == 2

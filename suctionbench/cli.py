@@ -275,6 +275,7 @@ def pick(
                                "(random, centroid, planarity, planarity-centroid, gqcnn).")
     ] = "analytic",
     model: Annotated[str | None, typer.Option(help="GQ-CNN model directory (gqcnn policy).")] = None,
+    metric: Annotated[str, typer.Option(help="3D metric of the analytic policy: rwr, wr, ss, pc3d.")] = "rwr",
     placement: Annotated[str, typer.Option(help="drop (random orientation) or stable (most probable pose).")] = "drop",
     cup: Annotated[str, typer.Option(help="Cup preset: default or paper.")] = "default",
     camera: Annotated[str, typer.Option(help="Camera preset or intrinsics TOML.")] = "primesense",
@@ -296,7 +297,7 @@ def pick(
                 raise InputError(f"--grasp approach {values[3:].tolist()}: must be a unit vector")
         request = PickRequest(
             object_key, seed=seed, grasp=values, policy=policy, placement=placement, cup=cup_preset(cup),
-            camera=camera, model=model,
+            camera=camera, model=model, metric=metric,
         )
         if log is not None and log.suffix != ".mcap":
             raise InputError(f"--log '{log}': expected a .mcap file name")

@@ -61,6 +61,9 @@ class PickRequest:
     model: str | None = None
     """GQ-CNN model directory for the gqcnn policy (default: the shipped model)."""
 
+    metric: str = "rwr"
+    """3D metric the known-state analytic policy ranks by: rwr, wr, ss or pc3d."""
+
     observation_noise: bool = True
     """Apply the simulated sensor's axial noise (sensing.noise.AxialNoiseConfig) to observations."""
 
@@ -145,7 +148,7 @@ class PickRunner:
             from suctionbench.policies.analytic import analytic_grasp, random_surface_grasp
 
             if req.policy == "analytic":
-                chosen = analytic_grasp(mesh, com, self.record.mass, req.cup, req.seed)
+                chosen = analytic_grasp(mesh, com, self.record.mass, req.cup, req.seed, metric=req.metric)
             else:
                 chosen = random_surface_grasp(mesh, req.seed)
             point, approach = chosen.point, chosen.approach

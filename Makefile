@@ -17,9 +17,9 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install -q -e ".[dev,ray]"
 	touch $(STAMP)
 
-# The main job available so far: label grasps on a shipped object and print the table.
+# The main job: a short benchmark run of the GQ-CNN policy with the shipped model.
 demo: $(STAMP)
-	$(SB) label assets/meshes/soap_bar.ply --grasps 300 --mass 0.15 --seed 0 --out out/demo/labels.npz
+	$(SB) eval --policy gqcnn --task smoke --seed 0 --out out/demo
 
 test: $(STAMP)
 	$(PY) -m pytest -q -m "not slow"

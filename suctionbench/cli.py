@@ -421,6 +421,54 @@ def dataset_show(
     _run(as_json, body)
 
 
+@app.command("eval")
+def eval_cmd(
+    policy: Annotated[
+        str, typer.Option(help="Policy: gqcnn, planarity-centroid, centroid, planarity, random, analytic.")
+    ],
+    out: Annotated[Path, typer.Option(help="Run directory (trials/*.mcap, run.json).")],
+    set_name: Annotated[str | None, typer.Option("--set", help="Object set (instead of --task).")] = None,
+    task: Annotated[str | None, typer.Option(help="Task name (tasks/*.toml) or TOML path.")] = None,
+    model: Annotated[str | None, typer.Option(help="GQ-CNN model directory (default: the shipped one).")] = None,
+    trials: Annotated[int | None, typer.Option(help="Number of trials (default: the task's).")] = None,
+    workers: Annotated[int, typer.Option(help="Parallel workers (0 = all cores).")] = 0,
+    engine: Annotated[str, typer.Option(help="local or ray.")] = "local",
+    address: Annotated[str | None, typer.Option(help="Ray cluster address.")] = None,
+    metric: Annotated[str, typer.Option(help="3D metric of the analytic policy.")] = "rwr",
+    cup: Annotated[str, typer.Option(help="Cup preset: default or paper.")] = "default",
+    seed: Annotated[int | None, typer.Option(help="Base seed of the trials (default: the task's).")] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Run the benchmark: seeded trials in simulation, one MCAP log each, and the paper-style table."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.config import cup_preset
+        from suctionbench.evaluation.runner import run_eval
+        from suctionbench.evaluation.tasks import Task, load_task
+
+        if (set_name is None) == (task is None):
+            raise InputError("give exactly one of --set S or --task T")
+        cup_preset(cup)
+        the_task = load_task(task) if task else Task(name=set_name, set=set_name, trials=trials or 25)
+        runs = {}
+        metrics = the_task.metrics if the_task.metrics and policy == "analytic" else (metric,)
+        for m in metrics:
+            run_dir = out / m if len(metrics) > 1 else out
+            count = trials or the_task.trials
+            with _progress(count, f"{policy} {m if len(metrics) > 1 else ''}".strip(), not as_json) as advance:
+                runs[m] = run_eval(the_task, policy, run_dir, model=model, trials=trials, seed=seed,
+                                   workers=workers or os.cpu_count() or 1, engine=engine, address=address,
+                                   metric=m, cup=cup, progress=advance)
+        if not as_json:
+            rows = [{"policy": policy if len(runs) == 1 else f"analytic-{m}", "set": r["set"], "trials": r["trials"],
+                     "AP": r["ap"], "success": r["success_rate"], "label_precision": r["label_precision"],
+                     "picks_per_hour": r["picks_per_hour"], "invalid": r["invalid"]} for m, r in runs.items()]
+            _print_rows(f"eval {the_task.name}", rows)
+        return {"out": str(out), "runs": runs} if len(runs) > 1 else {"out": str(out), **next(iter(runs.values()))}
+
+    _run(as_json, body)
+
+
 @bench_app.command("label")
 def bench_label(
     mesh: Annotated[str | None, typer.Option(help="Mesh to label (default: the shipped ~10k-face soap bar).")] = None,

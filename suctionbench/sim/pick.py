@@ -4,6 +4,7 @@ can be compared grasp by grasp)."""
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -63,6 +64,9 @@ class PickRequest:
 
     metric: str = "rwr"
     """3D metric the known-state analytic policy ranks by: rwr, wr, ss or pc3d."""
+
+    stable_pose: int = 0
+    """Which stable pose (0 = most probable) the 'stable' placement uses."""
 
     observation_noise: bool = True
     """Apply the simulated sensor's axial noise (sensing.noise.AxialNoiseConfig) to observations."""
@@ -128,7 +132,10 @@ class PickRunner:
     def reset(self) -> None:
         """Place the object (seeded) and let it settle, the arm out of the camera's view."""
         req = self.request
-        stable = self.record.most_probable_pose() if req.placement == "stable" else None
+        stable = None
+        if req.placement == "stable":
+            poses = self.record.stable_poses
+            stable = np.asarray(poses[min(req.stable_pose, len(poses) - 1)]["transform"], dtype=float)
         self.episode.reset(np.random.default_rng((req.seed, 0)), stable_pose=stable)
 
     def run_after_reset(self, render: Path | None = None, log: Any = None) -> dict[str, Any]:
@@ -140,6 +147,8 @@ class PickRunner:
         mesh.apply_transform(pose)
         com = pose[:3, :3] @ np.asarray(self.record.com) + pose[:3, 3]
         chosen = None
+        self._sensing_time = 0.0
+        plan_start = time.perf_counter()
         if req.grasp is not None:
             point = pose[:3, :3] @ req.grasp[:3] + pose[:3, 3]
             approach = pose[:3, :3] @ (req.grasp[3:] / np.linalg.norm(req.grasp[3:]))
@@ -157,6 +166,7 @@ class PickRunner:
             chosen = self._plan_from_image()
             point, approach = chosen.point, chosen.approach
             q = None if np.isnan(chosen.score) else chosen.score
+        plan_time = time.perf_counter() - plan_start - self._sensing_time
         labeller = SuctionLabeller(mesh, LabelConfig(cup=req.cup), mass=self.record.mass, com=com)
         labels = labeller.label(point[None], approach[None], req.seed, metrics=("wr", "rwr"))
         if render is not None:
@@ -175,6 +185,8 @@ class PickRunner:
             "label_wr": bool(labels.wr[0]),
             "label_rwr": float(labels.rwr[0]),
             "placement_time": placement_time,
+            "sensing_time": self._sensing_time,
+            "plan_time": plan_time,
             **result.to_dict(),
         }
         if log is not None:
@@ -214,7 +226,10 @@ class PickRunner:
 
         kwargs = {"model": self.request.model} if self.request.policy == "gqcnn" and self.request.model else {}
         policy = make_policy(self.request.policy, **kwargs)
-        action = policy.plan(self.observe(), np.random.default_rng((self.request.seed, 3)))
+        start = time.perf_counter()
+        observation = self.observe()
+        self._sensing_time = time.perf_counter() - start
+        action = policy.plan(observation, np.random.default_rng((self.request.seed, 3)))
         rot, origin = self.camera_pose[:3, :3], self.camera_pose[:3, 3]
         cands = action.candidates
         return RankedGrasp(

@@ -1,0 +1,38 @@
+"""Gymnasium environments of suctionbench, all registered here and nowhere else.
+
+Importing this package (``import suctionbench`` does) registers each environment id with a
+string entry point, so registration costs only the import of gymnasium: MuJoCo, the scene and
+the analytic labeller are imported when an environment is first made. Ids are versioned; a
+change of physics, spaces or reward makes a new ``-vN`` rather than changing an existing one, so
+results reported against an id stay comparable.
+
+    >>> import gymnasium, suctionbench
+    >>> env = gymnasium.make("suctionbench/SuctionPick-v0", object_set="basic")
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium
+
+ENVIRONMENTS: dict[str, str] = {
+    "suctionbench/SuctionPick-v0": "suctionbench.envs.suction_pick:SuctionPickEnv",
+}
+"""Environment id -> entry point ("module:Class"), imported only by gymnasium.make."""
+
+for _env_id, _entry_point in ENVIRONMENTS.items():
+    if _env_id not in gymnasium.registry:  # a re-import (importlib.reload) must not warn about overriding
+        gymnasium.register(id=_env_id, entry_point=_entry_point)
+
+
+def __getattr__(name: str) -> Any:
+    """`from suctionbench.envs import SuctionPickEnv` without importing MuJoCo at package import."""
+    if name == "SuctionPickEnv":
+        from suctionbench.envs.suction_pick import SuctionPickEnv
+
+        return SuctionPickEnv
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+__all__ = ["ENVIRONMENTS", "SuctionPickEnv"]

@@ -1,0 +1,193 @@
+"""Run a benchmark: seeded trials (identical across policies), one MCAP log per trial, in parallel;
+the results table is then computed from the logs (suctionbench.runlog.reader), never from memory."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections import Counter
+from collections.abc import Callable, Iterator
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from suctionbench.errors import InputError
+from suctionbench.evaluation.tasks import Task
+from suctionbench.io import atomic_path
+
+PREDICT_THRESHOLD = 0.5
+"""An analytic label (rwr) above this predicts success, for the label-precision column."""
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One seeded pick of the benchmark."""
+
+    index: int
+    object_key: str
+    seed: int
+    placement: str
+    stable_pose: int
+    policy: str
+    model: str | None
+    metric: str
+    cup: str
+
+
+def plan_trials(task: Task, policy: str, *, model: str | None, trials: int | None, seed: int | None,
+                metric: str = "rwr", cup: str = "default") -> list[Trial]:
+    """Trial i: object i mod |set|, seed (base seed, i); cycles stable poses for 'stable' tasks."""
+    from suctionbench.objects.registry import list_objects
+
+    records = list_objects(task.set)
+    if not records:
+        raise InputError(f"task '{task.name}': object set '{task.set}' is empty")
+    count, base = trials or task.trials, task.seed if seed is None else seed
+    if count < 1:
+        raise InputError(f"--trials {count}: must be at least 1")
+    n = len(records)
+    return [
+        Trial(i, records[i % n].key, int(np.random.SeedSequence((base, i)).generate_state(1)[0] % 2**31),
+              task.placement, (i // n) % max(task.stable_poses, 1), policy, model, metric, cup)
+        for i in range(count)
+    ]
+
+
+def run_trial(trial: Trial, log_dir: str) -> dict[str, Any]:
+    """Run one trial and write its MCAP log (runs in a worker)."""
+    from suctionbench.config import cup_preset
+    from suctionbench.sim.pick import PickRequest, PickRunner
+
+    request = PickRequest(
+        trial.object_key, seed=trial.seed, policy=trial.policy, placement=trial.placement,
+        cup=cup_preset(trial.cup), model=trial.model, metric=trial.metric, stable_pose=trial.stable_pose,
+    )
+    record = PickRunner(request).run(log=Path(log_dir) / f"trial_{trial.index:05d}.mcap")
+    return {"trial": trial.index, **record}
+
+
+def _run_all(trials: list[Trial], log_dir: Path, engine: str, workers: int,
+             address: str | None) -> Iterator[dict[str, Any]]:
+    if engine == "local":
+        if workers <= 1:
+            for t in trials:
+                yield run_trial(t, str(log_dir))
+            return
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            yield from pool.map(run_trial, trials, [str(log_dir)] * len(trials))
+    elif engine == "ray":
+        try:
+            import ray
+        except ImportError:
+            raise InputError("--engine ray: Ray is not installed (pip install 'suctionbench[ray]')") from None
+        started = not ray.is_initialized()
+        if started:
+            ray.init(address=address, num_cpus=None if address else workers, include_dashboard=False,
+                     log_to_driver=False)
+        try:
+            remote = ray.remote(run_trial)
+            for ref in [remote.remote(t, str(log_dir)) for t in trials]:
+                yield ray.get(ref)
+        finally:
+            if started:
+                ray.shutdown()
+    else:
+        raise InputError(f"--engine '{engine}': expected local or ray")
+
+
+def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, trials: int | None = None,
+             seed: int | None = None, workers: int = 1, engine: str = "local", address: str | None = None,
+             metric: str = "rwr", cup: str = "default",
+             progress: Callable[[int], None] | None = None) -> dict[str, Any]:
+    """Run the trials into out/ (trials/*.mcap + run.json) and return the summary from the logs."""
+    from suctionbench.policies.analytic import analytic_grasp  # noqa: F401  (fail early on import problems)
+
+    if policy not in ("analytic", "random-surface"):
+        from suctionbench.policies.base import policy_factory
+
+        policy_factory(policy)  # unknown policy -> InputError before any work
+    if policy == "gqcnn":
+        _check_model(model)
+    planned = plan_trials(task, policy, model=model, trials=trials, seed=seed, metric=metric, cup=cup)
+    out = Path(out)
+    log_dir = out / "trials"
+    try:
+        log_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"output '{out}': cannot create it ({exc.strerror})") from None
+    run = {"task": asdict(task), "policy": policy, "model": model, "metric": metric, "cup": cup,
+           "trials": len(planned), "seed": seed if seed is not None else task.seed}
+    with atomic_path(out / "run.json") as tmp:
+        tmp.write_text(json.dumps(run, indent=1))
+    for _ in _run_all(planned, log_dir, engine, workers, address):
+        if progress:
+            progress(1)
+    return summarize_run(out)
+
+
+def _check_model(model: str | None) -> None:
+    from suctionbench.learning.checkpoint import load_model
+    from suctionbench.resources import asset_path
+
+    load_model(model or asset_path("models", "gqcnn-compact"))
+
+
+def summarize_run(run_dir: Path) -> dict[str, Any]:
+    """Results table of a run directory, computed from its MCAP logs."""
+    from suctionbench.runlog.reader import read_run
+
+    run_dir = Path(run_dir)
+    try:
+        run = json.loads((run_dir / "run.json").read_text())
+    except FileNotFoundError:
+        raise InputError(f"run '{run_dir}': no run.json (not a suctionbench eval run)") from None
+    records = [episode["result"] for episode in read_run(run_dir / "trials") if episode.get("result")]
+    return {"policy": run["policy"], "task": run["task"]["name"], "set": run["task"]["set"],
+            "metric": run.get("metric"), **trial_metrics(records)}
+
+
+def trial_metrics(records: list[dict[str, Any]]) -> dict[str, Any]:
+    """AP of the policy's q against simulated success, success rate, analytic-label precision,
+    picks per hour, Spearman rank correlation of q with success, and outcome counts."""
+    from scipy.stats import spearmanr
+
+    from suctionbench.learning.metrics import average_precision
+
+    valid = [r for r in records if r.get("valid")]
+    success = np.array([bool(r["success"]) for r in valid])
+    q = np.array([np.nan if r.get("policy_q") is None else float(r["policy_q"]) for r in valid])
+    rwr = np.array([float(r["label_rwr"]) for r in valid])
+    has_q = np.isfinite(q)
+    ap = float(average_precision(success[has_q], q[has_q])) if has_q.any() and success[has_q].any() else None
+    predicted = rwr > PREDICT_THRESHOLD
+    cycle = np.array([r.get("sensing_time", 0.0) + r.get("plan_time", 0.0) + r["sim_time"] for r in valid])
+    rate = float(success.mean()) if len(valid) else 0.0
+    rho = spearmanr(q[has_q], success[has_q]).statistic if has_q.sum() > 2 and success[has_q].std() > 0 else None
+    return {
+        "trials": len(records),
+        "invalid": len(records) - len(valid),
+        "success_rate": round(rate, 4),
+        "ap": None if ap is None else round(ap, 4),
+        "accuracy_q": round(float(((q[has_q] > 0.5) == success[has_q]).mean()), 4) if has_q.any() else None,
+        "spearman_q": None if rho is None or math.isnan(rho) else round(float(rho), 4),
+        "label_precision": round(float(success[predicted].mean()), 4) if predicted.any() else None,
+        "label_positive_rate": round(float(predicted.mean()), 4) if len(valid) else None,
+        "mean_cycle_s": round(float(cycle.mean()), 3) if len(valid) else None,
+        "picks_per_hour": round(3600.0 * rate / float(cycle.mean()), 1) if len(valid) and cycle.mean() > 0 else None,
+        "mean_plan_s": round(float(np.mean([r.get("plan_time", 0.0) for r in valid])), 4) if valid else None,
+        "outcomes": dict(sorted(Counter(r["failure"] or "success" for r in records).items())),
+        "per_object": _per_object(valid),
+    }
+
+
+def _per_object(valid: list[dict[str, Any]]) -> dict[str, list[int]]:
+    table: dict[str, list[int]] = {}
+    for r in valid:
+        table.setdefault(r["object"], [0, 0])
+        table[r["object"]][0] += bool(r["success"])
+        table[r["object"]][1] += 1
+    return dict(sorted(table.items()))

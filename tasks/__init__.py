@@ -1,0 +1,1 @@
+"""Benchmark task definitions (TOML), shipped as package data."""

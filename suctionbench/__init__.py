@@ -10,3 +10,4 @@ import os
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 __version__ = "0.1.0"
+from suctionbench import envs as _envs  # noqa: E402, F401  (registers the gymnasium environments; imports only gymnasium)

@@ -72,6 +72,10 @@ class PickRequest:
     """Apply the simulated sensor's axial noise (sensing.noise.AxialNoiseConfig) to observations."""
 
 
+_POLICY_CACHE: dict[tuple[str, str | None], Any] = {}
+"""Image policies by (name, model directory), built once per process."""
+
+
 def _pose(position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
     """4x4 transform from a position and a flat 3x3 rotation."""
     pose = np.eye(4)
@@ -224,8 +228,11 @@ class PickRunner:
         from suctionbench.policies.analytic import RankedGrasp
         from suctionbench.policies.base import make_policy
 
-        kwargs = {"model": self.request.model} if self.request.policy == "gqcnn" and self.request.model else {}
-        policy = make_policy(self.request.policy, **kwargs)
+        key = (self.request.policy, self.request.model)
+        if key not in _POLICY_CACHE:  # policies are stateless between plans; models load once per process
+            kwargs = {"model": self.request.model} if self.request.policy == "gqcnn" and self.request.model else {}
+            _POLICY_CACHE[key] = make_policy(self.request.policy, **kwargs)
+        policy = _POLICY_CACHE[key]
         start = time.perf_counter()
         observation = self.observe()
         self._sensing_time = time.perf_counter() - start

@@ -160,3 +160,15 @@ def test_bad_arguments_name_the_input():
             env.reset(seed=0, options={"objects": "basic/box_tea"})
     finally:
         env.close()
+
+
+def test_scene_unstable_after_an_attempt_ends_the_episode_with_the_last_image(monkeypatch):
+    env = gymnasium.make(ENV_ID, max_attempts=3)
+    try:
+        obs, _ = env.reset(seed=3, options=BOX)
+        monkeypatch.setattr(env.unwrapped, "_retract", lambda: False)  # as if the settling blew up
+        after, _, terminated, _, info = env.step(top_down_at_visible_centre(obs, offset=(0.12, 0.0)))
+        assert terminated and info["attempt"] == 1 and info["detail"].startswith("unstable while")
+        assert all(np.array_equal(obs[k], after[k]) for k in obs)
+    finally:
+        env.close()

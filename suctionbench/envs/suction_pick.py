@@ -105,15 +105,17 @@ class SuctionPickEnv(gymnasium.Env):
 
     The episode terminates after a successful attempt, after `max_attempts` attempts, after an
     attempt whose simulation became invalid (`info["valid"]` False: non-finite, exploding or
-    interpenetrating state), or when the object has left the camera's view. `truncated` is always
+    interpenetrating state) or went unstable while the object settled after it (said in
+    `info["detail"]`; the attempt's own outcome stands), or when the object has left the camera's
+    view. `truncated` is always
     False: episodes last at most `max_attempts` steps, so no time limit is registered.
 
     After every executed attempt the vacuum vents, the arm returns to its waiting configuration
     and the object settles where it fell; the next observation shows that scene (no reset). The
     return of the arm is done by setting its joints directly, a simulation shortcut standing for a
     retract that does not touch the object; the fall and settling of the object are simulated.
-    After an invalid attempt the scene cannot be rendered, so the observation repeats the previous
-    one; after an invalid action nothing moved, and the observation is the same image again.
+    When the scene has gone unstable it cannot be rendered, so the observation repeats the
+    previous one; after an invalid action nothing moved, and the observation is the same image again.
 
     ## Info
 
@@ -210,8 +212,6 @@ class SuctionPickEnv(gymnasium.Env):
         self._ready: tuple[np.ndarray, np.ndarray] | None = None
         self._attempt = 0
         self._done = True
-        self._colour: mujoco.Renderer | None = None
-        self._colour_model: mujoco.MjModel | None = None
 
     # -- gymnasium API --------------------------------------------------------------------------
     def reset(
@@ -251,6 +251,7 @@ class SuctionPickEnv(gymnasium.Env):
         action = np.asarray(action, dtype=float).reshape(6)
         norm = float(np.linalg.norm(action[3:]))
         info: dict[str, Any] = {"object": runner.request.object_key, "attempt": self._attempt}
+        broken = False  # the scene can no longer be simulated or rendered
         if not (np.all(np.isfinite(action)) and norm >= MIN_APPROACH_NORM):
             self.last_wall_time = None
             info.update(
@@ -273,33 +274,38 @@ class SuctionPickEnv(gymnasium.Env):
                 info["wall_time"] = wall_time
             if result.valid and self._retract():
                 self._observation = self._observe()
-            else:  # the state cannot be rendered: repeat the last image (documented)
-                info["valid"] = False
-                info["detail"] = info["detail"] or "unstable while the object settled after the attempt"
+            else:  # the state cannot be rendered: repeat the last image and end the episode
+                broken = True
+                if result.valid:  # the attempt's outcome stands; only the settling after it broke
+                    info["detail"] = "unstable while the object settled after the attempt"
         visible = bool(self._observation["mask"].any())
         info["object_visible"] = visible
-        terminated = bool(info["success"] or not info["valid"] or self._attempt >= self.max_attempts or not visible)
+        terminated = bool(info["success"] or broken or self._attempt >= self.max_attempts or not visible)
         self._done = terminated
         return self._copy_observation(), 1.0 if info["success"] else 0.0, terminated, False, info
 
     def render(self) -> np.ndarray | None:
-        """The overhead camera's colour image (H, W, 3) uint8 of the current state ("rgb_array")."""
+        """The overhead camera's colour image (H, W, 3) uint8 of the current state ("rgb_array").
+
+        The OpenGL context is made and freed per call (about 0.2 s) rather than kept: a context
+        left for the garbage collector at interpreter exit fails noisily, and an environment that
+        is never closed is common.
+        """
         if self.render_mode is None:
             gymnasium.logger.warn("render() called with render_mode=None; pass render_mode='rgb_array' to make()")
             return None
         if self._runner is None:
             raise ResetNeeded("call reset() before render()")
         scene = self._runner.scene
-        if self._colour_model is not scene.model:  # one OpenGL context, rebuilt when the object changes
-            self._close_renderer()
-            self._colour = mujoco.Renderer(scene.model, self.intrinsics.height, self.intrinsics.width)
-            self._colour_model = scene.model
-        self._colour.update_scene(self._runner.episode.data, scene.camera)
-        return self._colour.render().copy()
+        renderer = mujoco.Renderer(scene.model, self.intrinsics.height, self.intrinsics.width)
+        try:
+            renderer.update_scene(self._runner.episode.data, scene.camera)
+            return renderer.render().copy()
+        finally:
+            renderer.close()
 
     def close(self) -> None:
-        """Free the colour renderer's OpenGL context and the cached scenes (idempotent)."""
-        self._close_renderer()
+        """Drop the cached scenes (idempotent); the environment can be reset again afterwards."""
         self._runners.clear()
         self._runner, self._observation, self._done = None, None, True
 
@@ -374,8 +380,3 @@ class SuctionPickEnv(gymnasium.Env):
             if k > 100 and speed < 1e-3:
                 break
         return True
-
-    def _close_renderer(self) -> None:
-        renderer, self._colour, self._colour_model = self._colour, None, None
-        if renderer is not None:
-            renderer.close()

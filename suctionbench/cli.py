@@ -303,10 +303,7 @@ def pick(
             raise InputError(f"--log '{log}': expected a .mcap file name")
         result = PickRunner(request).run(render=render, log=log)
         if not as_json:
-            table = Table(title=f"pick {object_key}", show_header=False)
-            for key, value in result.items():
-                table.add_row(key, f"{value:.4g}" if isinstance(value, float) else str(value))
-            Console().print(table)
+            _print_kv(f"pick {object_key}", result)
         return result
 
     _run(as_json, body)
@@ -492,13 +489,18 @@ def bench_label(
             memory_grasps=memory_grasps, cores=cores, seed=seed,
         )
         if not as_json:
-            table = Table(title="bench label: vectorised vs reference", show_header=False)
-            for key, value in result.items():
-                table.add_row(key, f"{value:.4g}" if isinstance(value, float) else str(value))
-            Console().print(table)
+            _print_kv("bench label: vectorised vs reference", result)
         return result
 
     _run(as_json, body)
+
+
+def _print_kv(title: str, result: dict[str, Any]) -> None:
+    """A two-column table of a command's result (human output)."""
+    table = Table(title=title, show_header=False)
+    for key, value in result.items():
+        table.add_row(key, f"{value:.4g}" if isinstance(value, float) else str(value))
+    Console().print(table)
 
 
 def _record_row(record: Any) -> dict[str, Any]:
@@ -696,10 +698,7 @@ def bench_episode_cmd(
 
         result = bench_episode(object_key=object_key, episodes=episodes, cores=cores, seed=seed)
         if not as_json:
-            table = Table(title="bench episode", show_header=False)
-            for key, value in result.items():
-                table.add_row(key, str(value))
-            Console().print(table)
+            _print_kv("bench episode", result)
         return result
 
     _run(as_json, body)
@@ -720,10 +719,7 @@ def bench_agreement_cmd(
 
         result = bench_agreement(set_name=set_name, trials=trials, seed=seed, threshold=threshold)
         if not as_json:
-            table = Table(title=f"analytic rwr > {threshold} vs simulated success ({set_name})", show_header=False)
-            for key, value in result.items():
-                table.add_row(key, str(value))
-            Console().print(table)
+            _print_kv(f"analytic rwr > {threshold} vs simulated success ({set_name})", result)
         return result
 
     _run(as_json, body)
@@ -745,10 +741,7 @@ def bench_generate_cmd(
         result = bench_generate(objects=objects, datapoints=datapoints, workers=workers or os.cpu_count() or 1,
                                 seed=seed)
         if not as_json:
-            table = Table(title="bench generate", show_header=False)
-            for key, value in result.items():
-                table.add_row(key, str(value))
-            Console().print(table)
+            _print_kv("bench generate", result)
         return result
 
     _run(as_json, body)
@@ -775,10 +768,7 @@ def bench_plan_cmd(
         result = bench_plan(policies=[p for p in policies.split(",") if p], model=model, scenes=scenes, seed=seed,
                             cores=cores)
         if not as_json:
-            table = Table(title="bench plan", show_header=False)
-            for key, value in result.items():
-                table.add_row(key, str(value))
-            Console().print(table)
+            _print_kv("bench plan", result)
         return result
 
     _run(as_json, body)

@@ -214,40 +214,12 @@ def run_units(
     units: list[Unit], object_dirs: list[str], camera: str, config: GenerationConfig, *,
     engine: str, workers: int, address: str | None,
 ) -> Iterator[tuple[Unit, dict[str, np.ndarray]]]:
-    """Yield (unit, arrays) in unit order, computed by the chosen engine."""
-    if not units:
-        return
-    args = [(u, object_dirs[u.object_index], camera, config) for u in units]
-    if engine == "local":
-        if workers <= 1:
-            for a in args:
-                yield a[0], generate_unit(*a)
-            return
-        from concurrent.futures import ProcessPoolExecutor
+    """Yield (unit, arrays) in unit order, computed by the chosen engine (suctionbench.parallel)."""
+    from suctionbench.parallel import map_ordered
 
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            futures = [pool.submit(generate_unit, *a) for a in args]
-            for unit, future in zip(units, futures, strict=True):
-                yield unit, future.result()
-    elif engine == "ray":
-        try:
-            import ray
-        except ImportError:
-            raise InputError("--engine ray: Ray is not installed (pip install 'suctionbench[ray]')") from None
-        started = not ray.is_initialized()
-        if started:
-            ray.init(address=address, num_cpus=None if address else workers, include_dashboard=False,
-                     log_to_driver=False, ignore_reinit_error=True)
-        try:
-            remote = ray.remote(generate_unit)
-            refs = [remote.remote(*a) for a in args]
-            for unit, ref in zip(units, refs, strict=True):
-                yield unit, ray.get(ref)
-        finally:
-            if started:
-                ray.shutdown()
-    else:
-        raise InputError(f"--engine '{engine}': expected local or ray")
+    args = [(u, object_dirs[u.object_index], camera, config) for u in units]
+    results = map_ordered(generate_unit, args, engine=engine, workers=workers, address=address)
+    yield from zip(units, results, strict=True)
 
 
 def generate_dataset(

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 import math
 from collections import Counter
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -68,37 +68,6 @@ def run_trial(trial: Trial, log_dir: str) -> dict[str, Any]:
     return {"trial": trial.index, **record}
 
 
-def _run_all(trials: list[Trial], log_dir: Path, engine: str, workers: int,
-             address: str | None) -> Iterator[dict[str, Any]]:
-    if engine == "local":
-        if workers <= 1:
-            for t in trials:
-                yield run_trial(t, str(log_dir))
-            return
-        from concurrent.futures import ProcessPoolExecutor
-
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            yield from pool.map(run_trial, trials, [str(log_dir)] * len(trials))
-    elif engine == "ray":
-        try:
-            import ray
-        except ImportError:
-            raise InputError("--engine ray: Ray is not installed (pip install 'suctionbench[ray]')") from None
-        started = not ray.is_initialized()
-        if started:
-            ray.init(address=address, num_cpus=None if address else workers, include_dashboard=False,
-                     log_to_driver=False)
-        try:
-            remote = ray.remote(run_trial)
-            for ref in [remote.remote(t, str(log_dir)) for t in trials]:
-                yield ray.get(ref)
-        finally:
-            if started:
-                ray.shutdown()
-    else:
-        raise InputError(f"--engine '{engine}': expected local or ray")
-
-
 def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, trials: int | None = None,
              seed: int | None = None, workers: int = 1, engine: str = "local", address: str | None = None,
              metric: str = "rwr", cup: str = "default",
@@ -123,7 +92,10 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
            "trials": len(planned), "seed": seed if seed is not None else task.seed}
     with atomic_path(out / "run.json") as tmp:
         tmp.write_text(json.dumps(run, indent=1))
-    for _ in _run_all(planned, log_dir, engine, workers, address):
+    from suctionbench.parallel import map_ordered
+
+    for _ in map_ordered(run_trial, [(t, str(log_dir)) for t in planned], engine=engine, workers=workers,
+                         address=address):
         if progress:
             progress(1)
     return summarize_run(out)

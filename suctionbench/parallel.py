@@ -1,0 +1,51 @@
+"""Execution engines shared by dataset generation and evaluation: the same picklable task
+function over a list of argument tuples, results yielded in input order, on a local process pool
+or on Ray (an existing cluster via `address`, else a local one started for the call)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
+
+from suctionbench.errors import InputError
+
+ENGINES = ("local", "ray")
+"""Available execution engines."""
+
+
+def map_ordered(
+    fn: Callable[..., Any], args: Sequence[tuple], *, engine: str = "local", workers: int = 1,
+    address: str | None = None,
+) -> Iterator[Any]:
+    """Yield fn(*a) for every a in args, in order, computed by `engine`."""
+    if engine not in ENGINES:
+        raise InputError(f"--engine '{engine}': expected local or ray")
+    if not args:
+        return
+    if engine == "local":
+        if workers <= 1:
+            for a in args:
+                yield fn(*a)
+            return
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            futures = [pool.submit(fn, *a) for a in args]
+            for future in futures:
+                yield future.result()
+        return
+    try:
+        import ray
+    except ImportError:
+        raise InputError("--engine ray: Ray is not installed (pip install 'suctionbench[ray]')") from None
+    started = not ray.is_initialized()
+    if started:
+        ray.init(address=address, num_cpus=None if address else workers, include_dashboard=False,
+                 log_to_driver=False, ignore_reinit_error=True)
+    try:
+        remote = ray.remote(fn)
+        for ref in [remote.remote(*a) for a in args]:
+            yield ray.get(ref)
+    finally:
+        if started:
+            ray.shutdown()

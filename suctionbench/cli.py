@@ -466,6 +466,25 @@ def eval_cmd(
     _run(as_json, body)
 
 
+@app.command()
+def report(
+    run_dirs: Annotated[list[Path], typer.Argument(help="Run directories from `suctionbench eval`.")],
+    out: Annotated[Path, typer.Option(help="Report directory (index.html, report.md, figures).")],
+    as_json: JsonOpt = False,
+) -> None:
+    """HTML + Markdown report of eval runs: tables, PR and success-attempt curves, failures."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.evaluation.report import build_report
+
+        result = build_report(run_dirs, out)
+        if not as_json:
+            _print_rows(f"report -> {out}", result["rows"])
+        return result
+
+    _run(as_json, body)
+
+
 @bench_app.command("label")
 def bench_label(
     mesh: Annotated[str | None, typer.Option(help="Mesh to label (default: the shipped ~10k-face soap bar).")] = None,

@@ -26,13 +26,13 @@ from typing import Any
 import numpy as np
 
 from suctionbench.config import STANDARD_GRAVITY, LabelConfig, to_dict
+from suctionbench.dataset.storage import FIELDS
 from suctionbench.errors import InputError
 from suctionbench.io import atomic_path
 from suctionbench.sensing.noise import DepthNoiseConfig
 
-UNIT_FIELDS = ("depth_ims_tf_table", "hand_poses", "robust_suction_wrench_resistance", "object_labels",
-               "pose_labels", "image_labels", "grasp_labels", "seal_flags", "wrench_resistance")
-"""Per-datapoint arrays of a unit (and of a shard), in the Dex-Net naming."""
+UNIT_FIELDS = tuple(FIELDS)
+"""Per-datapoint arrays of a unit: exactly the fields of a shard (dataset.storage.FIELDS)."""
 
 MAX_IMAGES_PER_UNIT = 100_000
 """Image ids are unit index x this + image number: unique without coordination."""
@@ -172,10 +172,9 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
 
 
 def _empty(name: str) -> np.ndarray:
-    shapes = {"depth_ims_tf_table": (0, 32, 32, 1), "hand_poses": (0, 7)}
-    dtypes = {"depth_ims_tf_table": np.float32, "hand_poses": np.float32,
-              "robust_suction_wrench_resistance": np.float32, "seal_flags": np.uint8, "wrench_resistance": np.uint8}
-    return np.zeros(shapes.get(name, (0,)), dtypes.get(name, np.int32))
+    """A zero-length array of the field's dtype and per-datapoint shape."""
+    spec = FIELDS[name]
+    return np.zeros((0, *spec.shape), spec.dtype)
 
 
 # -- unit files (resume) ---------------------------------------------------------------------------

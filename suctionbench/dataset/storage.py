@@ -184,6 +184,16 @@ def _file_digest(path: Path) -> tuple[str, int]:
     return h.hexdigest(), size
 
 
+def _read_file(path: Path, what: str, missing: str) -> bytes:
+    """A file's bytes, or an InputError naming it: `missing` explains an absent file."""
+    try:
+        return path.read_bytes()
+    except FileNotFoundError:
+        raise InputError(f"{what} '{path}': missing ({missing})") from None
+    except OSError as exc:
+        raise InputError(f"{what} '{path}': cannot read ({exc.strerror})") from None
+
+
 def _load_npz(data: bytes, path: Path) -> np.ndarray:
     """The ``arr_0`` array of an ``.npz`` held in memory; InputError naming `path` if it is unreadable."""
     try:
@@ -423,12 +433,7 @@ class DatasetReader:
         for name in names:
             file_name = shard_file_name(name, index)
             path = self.tensor_dir / file_name
-            try:
-                data = path.read_bytes()
-            except FileNotFoundError:
-                raise InputError(f"shard file '{path}': missing (shard {index} is incomplete)") from None
-            except OSError as exc:
-                raise InputError(f"shard file '{path}': cannot read ({exc.strerror})") from None
+            data = _read_file(path, "shard file", f"shard {index} is incomplete")
             if verify:
                 expected = manifest["files"][file_name]
                 if len(data) != expected["bytes"] or hashlib.sha256(data).hexdigest() != expected["sha256"]:
@@ -727,12 +732,7 @@ def read_split(directory: str | Path, kind: str, part: str) -> np.ndarray:
     if part not in SPLIT_PARTS:
         raise InputError(f"split part '{part}': unknown (known: {list(SPLIT_PARTS)})")
     path = Path(directory) / SPLIT_DIR / kind / f"{part}_indices.npz"
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"split file '{path}': missing (splits not written yet?)") from None
-    except OSError as exc:
-        raise InputError(f"split file '{path}': cannot read ({exc.strerror})") from None
+    data = _read_file(path, "split file", "splits not written yet?")
     arr = _load_npz(data, path)
     if arr.ndim != 1 or arr.dtype.kind not in "iu":
         raise InputError(f"split file '{path}': expected 1-D integer indices, got {arr.dtype}{arr.shape}")

@@ -73,8 +73,6 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
              metric: str = "rwr", cup: str = "default",
              progress: Callable[[int], None] | None = None) -> dict[str, Any]:
     """Run the trials into out/ (trials/*.mcap + run.json) and return the summary from the logs."""
-    from suctionbench.policies.analytic import analytic_grasp  # noqa: F401  (fail early on import problems)
-
     if policy not in ("analytic", "random-surface"):
         from suctionbench.policies.base import policy_factory
 

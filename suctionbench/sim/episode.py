@@ -140,11 +140,16 @@ class PickEpisode:
         self.data = mujoco.MjData(self.model)
         self.cup = SuctionController(self.model, scene.cup)
         self.arm_qpos = np.array([self.model.jnt_qposadr[self.model.joint(j).id] for j in RIGHT_ARM_JOINTS])
-        self.arm_dof = np.array([self.model.jnt_dofadr[self.model.joint(j).id] for j in RIGHT_ARM_JOINTS])
         self.arm_act = np.array([self.model.actuator(j).id for j in RIGHT_ARM_JOINTS])
         self.speed = np.array([JOINT_SPEED_LIMITS[j] for j in RIGHT_ARM_JOINTS]) * config.speed_scale
         self.object = self.model.body(scene.object_body).id
         self.object_qpos = self.model.jnt_qposadr[self.model.body_jntadr[self.object]]
+        object_dof = self.model.jnt_dofadr[self.model.body_jntadr[self.object]]
+        self.object_dofs = slice(object_dof, object_dof + 6)
+        self.data_ik = mujoco.MjData(self.model)
+        """Scratch state for IK (the solver restores it), kept at the robot's home pose."""
+        self.data_ik.qpos[:] = scene.home_qpos
+        self._ready: np.ndarray | None = None
         self.tip = self.model.site(scene.cup.tip_site).id
         self.robot_geoms = self._robot_geoms()
         self.trajectory: list[np.ndarray] = []
@@ -196,7 +201,7 @@ class PickEpisode:
         try:
             for k in range(steps):
                 self._step(q_hold)
-                if k > 100 and np.linalg.norm(self.data.qvel[self._object_dofs()]) < 1e-3:
+                if k > 100 and np.linalg.norm(self.data.qvel[self.object_dofs]) < 1e-3:
                     break
         except _Unstable as exc:
             self.placement_error = f"during placement: {exc}"
@@ -209,16 +214,10 @@ class PickEpisode:
 
     def _ready_configuration(self) -> np.ndarray:
         """Arm configuration with the tool tip at `ready_tip`, pointing down (cached)."""
-        if getattr(self, "_ready", None) is None:
-            self.data_ik = mujoco.MjData(self.model)
-            self.data_ik.qpos[:] = self.scene.home_qpos
+        if self._ready is None:
             home = self.scene.home_qpos[self.arm_qpos]
             self._ready = self._ik(np.asarray(self.config.ready_tip), np.array([0.0, 0.0, -1.0]), home)
         return self._ready
-
-    def _object_dofs(self) -> slice:
-        adr = self.model.jnt_dofadr[self.model.body_jntadr[self.object]]
-        return slice(adr, adr + 6)
 
     # -- stepping -------------------------------------------------------------------------------
     def _step(self, q_target: np.ndarray) -> int:
@@ -283,8 +282,7 @@ class PickEpisode:
     # -- the pick -------------------------------------------------------------------------------
     def execute(self, point: np.ndarray, approach: np.ndarray) -> EpisodeResult:
         """Pick at world `point` along unit world `approach` (pointing into the object)."""
-        c, m, d = self.config, self.model, self.data
-        self.data_ik = mujoco.MjData(m)
+        c, d = self.config, self.data
         start_wall, start_sim = time.perf_counter(), d.time
         phases: dict[str, float] = {}
         seal_time, peak_slip, lifted, in_bin = None, 0.0, False, False

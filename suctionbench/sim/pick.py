@@ -98,6 +98,10 @@ class PickRunner:
         self.camera_pose = sample_camera_pose(rng, centre, CameraPoseConfig().for_camera(self.intrinsics))
         self.scene = build_scene(self.record, request.cup, self.intrinsics, self.camera_pose)
         self.episode = PickEpisode(self.scene, request.episode)
+        self.mesh = self.record.mesh()
+        """The object's surface mesh in its own frame (loaded once; posed copies per episode)."""
+        self.observation: Any = None
+        """The last observation an image policy planned from (what the run log records)."""
 
     def object_pose(self) -> np.ndarray:
         """Current world transform of the object (its mesh frame)."""
@@ -147,10 +151,10 @@ class PickRunner:
         req = self.request
         placement_time = float(self.episode.data.time)
         pose = self.object_pose()
-        mesh = self.record.mesh()
+        mesh = self.mesh.copy()
         mesh.apply_transform(pose)
         com = pose[:3, :3] @ np.asarray(self.record.com) + pose[:3, 3]
-        chosen = None
+        chosen, self.observation = None, None
         self._sensing_time = 0.0
         plan_start = time.perf_counter()
         if req.grasp is not None:
@@ -234,25 +238,29 @@ class PickRunner:
             _POLICY_CACHE[key] = make_policy(self.request.policy, **kwargs)
         policy = _POLICY_CACHE[key]
         start = time.perf_counter()
-        observation = self.observe()
+        self.observation = self.observe()
         self._sensing_time = time.perf_counter() - start
-        action = policy.plan(observation, np.random.default_rng((self.request.seed, 3)))
+        action = policy.plan(self.observation, np.random.default_rng((self.request.seed, 3)))
         rot, origin = self.camera_pose[:3, :3], self.camera_pose[:3, 3]
         cands = action.candidates
+        if "points" not in cands:  # a policy that reports no candidates: the grasp is the only one
+            return RankedGrasp(action.point_world, action.approach_world, float(action.q),
+                               action.point_world[None], action.approach_world[None], None, 0)
         return RankedGrasp(
-            action.point_world, action.approach_world, float(action.q),
-            cands["points"] @ rot.T + origin if "points" in cands else action.point_world[None],
-            cands["approaches"] @ rot.T if "approaches" in cands else action.approach_world[None],
-            cands.get("q"), int(np.argmax(cands["q"])) if cands.get("q") is not None and len(cands["q"]) else 0,
+            action.point_world, action.approach_world, float(action.q), cands["points"] @ rot.T + origin,
+            cands["approaches"] @ rot.T, cands.get("q"), int(action.info["chosen"]),
         )
 
     def _log_start(self, log: Any, point: np.ndarray, approach: np.ndarray, chosen: Any) -> None:
         """Observation, candidates and chosen grasp; then state every `record_every` steps."""
         from suctionbench.sensing.camera import DepthRenderer
 
-        data, t = self.episode.data, float(self.episode.data.time)
-        with DepthRenderer(self.scene.model, self.intrinsics) as renderer:
-            depth = renderer.render(data, self.scene.camera)
+        t = float(self.episode.data.time)
+        if self.observation is not None:  # log exactly what the policy saw (noise and all)
+            depth = self.observation.depth
+        else:
+            with DepthRenderer(self.scene.model, self.intrinsics) as renderer:
+                depth = renderer.render(self.episode.data, self.scene.camera)
         log.log_observation(t, depth, self.intrinsics.matrix, self.intrinsics.width, self.intrinsics.height,
                             self.camera_pose)
         if chosen is not None:

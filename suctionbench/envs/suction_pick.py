@@ -17,8 +17,7 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
-from suctionbench.config import LabelConfig, cup_preset
-from suctionbench.contact import SuctionLabeller
+from suctionbench.config import cup_preset
 from suctionbench.errors import InputError
 from suctionbench.objects.registry import list_objects
 from suctionbench.sensing.camera import resolve_camera
@@ -126,8 +125,9 @@ class SuctionPickEnv(gymnasium.Env):
       `"invalid_action"`) and `detail` (what made an attempt invalid).
     - `label_seal`, `label_wr`, `label_rwr`: the analytic labels (seal formed, wrench resisted,
       robust wrench resistance) of the executed grasp in the true object state at the moment of
-      the grasp, with the environment's cup; `grasp_world`, the executed point and unit approach
-      in the world frame (6,). All four are None for an invalid action.
+      the grasp, with the environment's cup, and `label_scores` (the score of every 3D metric:
+      pc3d, ss, wr, rwr); `grasp_world`, the executed point and unit approach in the world frame
+      (6,). All five are None for an invalid action.
     - `seal_time` (s from the start of the attempt, None without a seal), `sim_time` (simulated
       seconds of the attempt), `peak_slip` (m), `lifted`, `in_bin`, `phases` (simulated time at
       which each phase ended).
@@ -256,14 +256,14 @@ class SuctionPickEnv(gymnasium.Env):
             self.last_wall_time = None
             info.update(
                 success=False, valid=True, failure="invalid_action", detail=None, label_seal=None, label_wr=None,
-                label_rwr=None, grasp_world=None, seal_time=None, sim_time=0.0, peak_slip=0.0, lifted=False,
+                label_rwr=None, label_scores=None, grasp_world=None, seal_time=None, sim_time=0.0, peak_slip=0.0, lifted=False,
                 in_bin=False, phases={},
             )
         else:
             rotation, origin = runner.camera_pose[:3, :3], runner.camera_pose[:3, 3]
             point = rotation @ action[:3] + origin
             approach = rotation @ (action[3:] / norm)
-            info.update(self._label(point, approach))
+            info.update(self._runner.label_grasp(point, approach))
             info["grasp_world"] = np.concatenate([point, approach])
             result = runner.episode.execute(point, approach)
             self.last_wall_time = result.wall_time
@@ -337,20 +337,6 @@ class SuctionPickEnv(gymnasium.Env):
     def _copy_observation(self) -> dict[str, np.ndarray]:
         """Fresh arrays on every return: users keep observations, and one may be returned twice."""
         return {name: array.copy() for name, array in self._observation.items()}
-
-    def _label(self, point: np.ndarray, approach: np.ndarray) -> dict[str, Any]:
-        """Analytic labels of the grasp on the object in its true current pose, as
-        `PickRunner.run_after_reset` labels the executed grasp (same cup, mass, centre of mass)."""
-        runner = self._runner
-        pose = runner.object_pose()
-        mesh = runner.record.mesh()
-        mesh.apply_transform(pose)
-        com = pose[:3, :3] @ np.asarray(runner.record.com) + pose[:3, 3]
-        labeller = SuctionLabeller(mesh, LabelConfig(cup=self.cup), mass=runner.record.mass, com=com)
-        labels = labeller.label(point[None], approach[None], runner.request.seed, metrics=("wr", "rwr"))
-        return {
-            "label_seal": bool(labels.seal.seal[0]), "label_wr": bool(labels.wr[0]), "label_rwr": float(labels.rwr[0]),
-        }
 
     def _retract(self) -> bool:
         """Vent, put the robot back in its waiting state (as after the reset) and let the object

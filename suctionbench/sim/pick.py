@@ -14,6 +14,7 @@ import numpy as np
 
 from suctionbench.config import CUP_DEFAULT, CupConfig, LabelConfig
 from suctionbench.contact import SuctionLabeller
+from suctionbench.contact.metrics import METRICS
 from suctionbench.errors import InputError
 from suctionbench.objects.build import ObjectRecord
 from suctionbench.objects.registry import load_object
@@ -175,8 +176,7 @@ class PickRunner:
             point, approach = chosen.point, chosen.approach
             q = None if np.isnan(chosen.score) else chosen.score
         plan_time = time.perf_counter() - plan_start - self._sensing_time
-        labeller = SuctionLabeller(mesh, LabelConfig(cup=req.cup), mass=self.record.mass, com=com)
-        labels = labeller.label(point[None], approach[None], req.seed, metrics=("wr", "rwr"))
+        labels = self.label_grasp(point, approach, mesh, com)
         if render is not None:
             self.render_png(render)
         if log is not None:
@@ -189,9 +189,7 @@ class PickRunner:
             "placement": req.placement,
             "grasp_world": [*point.tolist(), *approach.tolist()],
             "policy_q": q,
-            "label_seal": bool(labels.seal.seal[0]),
-            "label_wr": bool(labels.wr[0]),
-            "label_rwr": float(labels.rwr[0]),
+            **labels,
             "placement_time": placement_time,
             "sensing_time": self._sensing_time,
             "plan_time": plan_time,
@@ -200,6 +198,24 @@ class PickRunner:
         if log is not None:
             log.log_result(float(self.episode.data.time), record)
         return record
+
+    def label_grasp(self, point: np.ndarray, approach: np.ndarray, mesh: Any = None,
+                    com: np.ndarray | None = None) -> dict[str, Any]:
+        """Analytic labels of one grasp on the object in its true current pose: seal, nominal wrench
+        resistance, robust label, and every 3D metric's score (the known-objects tables rank by them)."""
+        if mesh is None:
+            pose = self.object_pose()
+            mesh = self.mesh.copy()
+            mesh.apply_transform(pose)
+            com = pose[:3, :3] @ np.asarray(self.record.com) + pose[:3, 3]
+        labeller = SuctionLabeller(mesh, LabelConfig(cup=self.request.cup), mass=self.record.mass, com=com)
+        labels = labeller.label(point[None], approach[None], self.request.seed, metrics=tuple(METRICS))
+        return {
+            "label_seal": bool(labels.seal.seal[0]),
+            "label_wr": bool(labels.wr[0]),
+            "label_rwr": float(labels.rwr[0]),
+            "label_scores": {name: float(labels.score(name)[0]) for name in METRICS},
+        }
 
     def observe(self) -> Any:
         """The policy's view: the overhead depth image (with sensor noise) and the camera."""

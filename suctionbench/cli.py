@@ -431,7 +431,9 @@ def eval_cmd(
     workers: Annotated[int, typer.Option(help="Parallel workers (0 = all cores).")] = 0,
     engine: Annotated[str, typer.Option(help="local or ray.")] = "local",
     address: Annotated[str | None, typer.Option(help="Ray cluster address.")] = None,
-    metric: Annotated[str, typer.Option(help="3D metric of the analytic policy.")] = "rwr",
+    metric: Annotated[
+        str | None, typer.Option(help="3D metric of the analytic policy (default: each of the task's, else rwr).")
+    ] = None,
     cup: Annotated[str, typer.Option(help="Cup preset: default or paper.")] = "default",
     seed: Annotated[int | None, typer.Option(help="Base seed of the trials (default: the task's).")] = None,
     as_json: JsonOpt = False,
@@ -448,7 +450,12 @@ def eval_cmd(
         cup_preset(cup)
         the_task = load_task(task) if task else Task(name=set_name, set=set_name, trials=trials or 25)
         runs = {}
-        metrics = the_task.metrics if the_task.metrics and policy == "analytic" else (metric,)
+        if metric is not None:
+            metrics = (metric,)
+        elif the_task.metrics and policy == "analytic":
+            metrics = the_task.metrics  # one run per metric, in out/METRIC
+        else:
+            metrics = ("rwr",)
         for m in metrics:
             run_dir = out / m if len(metrics) > 1 else out
             count = trials or the_task.trials

@@ -79,6 +79,10 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
         policy_factory(policy)  # unknown policy -> InputError before any work
     if policy == "gqcnn":
         _check_model(model)
+    from suctionbench.contact.metrics import METRICS
+
+    if metric not in METRICS:
+        raise InputError(f"--metric '{metric}' is unknown (known: {', '.join(METRICS)})")
     planned = plan_trials(task, policy, model=model, trials=trials, seed=seed, metric=metric, cup=cup)
     out = Path(out)
     log_dir = out / "trials"

@@ -464,10 +464,16 @@ def eval_cmd(
                                    workers=workers or os.cpu_count() or 1, engine=engine, address=address,
                                    metric=m, cup=cup, progress=advance)
         if not as_json:
-            rows = [{"policy": policy if len(runs) == 1 else f"analytic-{m}", "set": r["set"], "trials": r["trials"],
-                     "AP": r["ap"], "success": r["success_rate"], "label_precision": r["label_precision"],
-                     "picks_per_hour": r["picks_per_hour"], "invalid": r["invalid"]} for m, r in runs.items()]
+            known = bool(the_task.metrics)  # the paper's known-objects table: accuracy and Spearman too
+            rows = [{"policy": f"analytic-{m}" if policy == "analytic" else policy, "set": r["set"],
+                     "trials": r["trials"], "AP": r["ap"], "success": r["success_rate"],
+                     **({"accuracy": r["accuracy_q"], "spearman": r["spearman_q"]} if known else {}),
+                     "label_precision": r["label_precision"], "picks_per_hour": r["picks_per_hour"],
+                     "invalid": r["invalid"]} for m, r in runs.items()]
             _print_rows(f"eval {the_task.name}", rows)
+            if known and policy != "analytic":  # executed grasps scored by each 3D metric
+                _print_rows("3D metrics against simulated success",
+                            [{"metric": m, **stats} for r in runs.values() for m, stats in r["by_metric"].items()])
         return {"out": str(out), "runs": runs} if len(runs) > 1 else {"out": str(out), **next(iter(runs.values()))}
 
     _run(as_json, body)
@@ -475,7 +481,9 @@ def eval_cmd(
 
 @app.command()
 def report(
-    run_dirs: Annotated[list[Path], typer.Argument(help="Run directories from `suctionbench eval`.")],
+    run_dirs: Annotated[
+        list[Path], typer.Argument(help="Run directories from `suctionbench eval`, or directories holding runs.")
+    ],
     out: Annotated[Path, typer.Option(help="Report directory (index.html, report.md, figures).")],
     as_json: JsonOpt = False,
 ) -> None:
@@ -486,7 +494,9 @@ def report(
 
         result = build_report(run_dirs, out)
         if not as_json:
-            _print_rows(f"report -> {out}", result["rows"])
+            for title, rows in result["tables"].items():
+                _print_rows(title, rows)
+            Console().print(f"report -> {out / 'index.html'}")
         return result
 
     _run(as_json, body)

@@ -78,24 +78,6 @@ def test_eval_unwritable_output_exits_2():
     assert result.exit_code == 2 and "cannot create" in last_json(result)["error"]
 
 
-def test_report_from_a_smoke_run(tmp_path):
-    from suctionbench.evaluation.report import build_report, success_attempt_curve
-
-    result = CliRunner().invoke(app, ["eval", "--policy", "centroid", "--task", "smoke", "--workers", "1",
-                                      "--out", str(tmp_path / "run"), "--json"])
-    assert result.exit_code == 0, result.output
-    report = build_report([tmp_path / "run"], tmp_path / "report")
-    assert report["rows"][0]["policy"] == "centroid" and report["rows"][0]["paper success (AP)"] == "92 (89)"
-    for name in ("index.html", "report.md", "precision_recall.png", "success_attempt.png"):
-        assert (tmp_path / "report" / name).is_file(), name
-    page = (tmp_path / "report" / "index.html").read_text()
-    assert page.count("<tr>") == 2 and "centroid" in page
-    # success among the attempted grasps as the attempt rate grows (sorted by q, best first)
-    attempt, rate = success_attempt_curve(np.array([0.9, 0.1, 0.5]), np.array([True, False, False]))
-    np.testing.assert_allclose(attempt, [1 / 3, 2 / 3, 1.0])
-    np.testing.assert_allclose(rate, [1.0, 0.5, 1 / 3])
-
-
 def test_report_bad_input(tmp_path):
     result = CliRunner().invoke(app, ["report", str(tmp_path / "nope"), "--out", str(tmp_path / "r"), "--json"])
     assert result.exit_code == 2

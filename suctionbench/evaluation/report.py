@@ -5,6 +5,7 @@ a gallery of failures (depth crop around the executed grasp), and the paper's nu
 from __future__ import annotations
 
 import html
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -22,8 +23,45 @@ PAPER_RESULTS = {  # FACTS.md section 5: success rate (AP) in %, Basic / Typical
 }
 """The paper's physical results (GQ-CNN: the Dex-Net 3.0 model) for the comparison table."""
 
-GALLERY_SIZE = 12
-"""Failed trials shown in the gallery."""
+PAPER_KNOWN = {"pc3d": (88, 80), "ss": (89, 84), "wr": (93, 80), "rwr": (100, 92)}
+"""The paper's known-objects results (adversarial set, top-ranked grasp per metric): AP, success in %."""
+
+PAPER_RANDOM = {"pc3d": (71, 68, 0.36), "ss": (75, 74, 0.49), "wr": (78, 77, 0.52), "rwr": (80, 75, 0.62)}
+"""The paper's random-grasp classification (known objects): AP %, accuracy %, Spearman."""
+
+POLICY_ORDER = ("random", "planarity", "centroid", "planarity-centroid", "gqcnn")
+"""Row order of the policies x sets table (the paper's, weakest baseline first)."""
+
+GALLERY_PER_RUN = 6
+"""Failed trials of each run shown in the gallery."""
+
+
+@dataclass
+class Table:
+    """One table of the report."""
+
+    title: str
+    """Section heading."""
+
+    note: str
+    """What the table shows and how it compares with the paper."""
+
+    rows: list[dict[str, Any]] = field(default_factory=list)
+    """Rows with the same keys, in column order."""
+
+
+def expand_run_dirs(paths: list[Path]) -> list[Path]:
+    """Run directories: each path that holds a run.json, else the runs found below it (a directory
+    of runs, or `eval --task known_objects` with one run per metric), in sorted order."""
+    if not paths:
+        raise InputError("report: give at least one run directory")
+    runs = []
+    for path in map(Path, paths):
+        found = [path] if (path / "run.json").is_file() else sorted(p.parent for p in path.glob("**/run.json"))
+        if not found:
+            raise InputError(f"run '{path}': no run.json in it or below it (not a suctionbench eval run)")
+        runs += found
+    return runs
 
 
 def _records(run_dir: Path) -> list[dict[str, Any]]:
@@ -40,8 +78,68 @@ def success_attempt_curve(q: np.ndarray, success: np.ndarray) -> tuple[np.ndarra
     return attempted / len(q), np.cumsum(success[order]) / attempted
 
 
+def _percent(value: float | None) -> float | None:
+    return None if value is None else round(100.0 * value, 1)
+
+
+def _delta(ours: float | None, paper: float | None) -> str:
+    """Ours minus the paper's, in percentage points."""
+    return "-" if ours is None or paper is None else f"{ours - paper:+.0f}"
+
+
+def _tables(summaries: list[dict[str, Any]]) -> list[Table]:
+    """The report's tables: policies x sets, known objects per metric, random-grasp
+    classification per metric, and where the time of a pick goes."""
+    novel = Table("Novel objects: policies x sets",
+                  "AP of the policy's q against simulated success; label precision: share of simulated "
+                  "successes among executed grasps the analytic label (rwr > 0.5) calls robust. Paper: "
+                  "physical YuMi trials (FACTS.md section 5).")
+    known = Table("Known objects: top-ranked grasp per 3D metric",
+                  "Shape and pose known; the grasp with the highest score of the metric is executed. "
+                  "AP of that score against simulated success. Paper: 75 physical trials.")
+    classified = Table("Known objects: random-grasp classification",
+                       "Random reachable surface grasps, each scored by every 3D metric in the true state; "
+                       "AP, accuracy (score > 0.5) and Spearman rank correlation against simulated success.")
+    timing = Table("Where a pick's time goes (means per trial)",
+                   "Sensing: rendering the noisy depth image; planning: the policy's wall time; motion: "
+                   "simulated time of the approach, lift and transport. Picks per hour = success rate / cycle.")
+    for s in summaries:
+        label = f"{s['policy']}-{s['metric']}" if s["policy"] == "analytic" else s["policy"]
+        success = _percent(s["success_rate"])
+        if s["policy"] == "analytic":
+            paper = PAPER_KNOWN.get(s["metric"]) if s["set"] == "adversarial" else None
+            known.rows.append({"metric": s["metric"], "set": s["set"], "trials": s["trials"],
+                               "AP %": _percent(s["ap"]), "success %": success,
+                               "paper AP / success %": f"{paper[0]} / {paper[1]}" if paper else "-",
+                               "success - paper (points)": _delta(success, paper and paper[1])})
+        elif s["policy"] == "random-surface":
+            for metric, stats in s["by_metric"].items():
+                paper = PAPER_RANDOM.get(metric) if s["set"] == "adversarial" else None
+                classified.rows.append({
+                    "metric": metric, "set": s["set"], "grasps": s["trials"], "successes": round(
+                        s["success_rate"] * (s["trials"] - s["invalid"])),
+                    "AP %": _percent(stats["ap"]), "accuracy %": _percent(stats["accuracy"]),
+                    "Spearman": stats["spearman"],
+                    "paper AP / acc. % / Spearman": f"{paper[0]} / {paper[1]} / {paper[2]}" if paper else "-"})
+        else:
+            paper = PAPER_RESULTS.get(s["policy"], {}).get(s["set"])
+            novel.rows.append({"policy": s["policy"], "set": s["set"], "trials": s["trials"],
+                               "AP %": _percent(s["ap"]), "success %": success,
+                               "label precision %": _percent(s["label_precision"]),
+                               "picks/hour": s["picks_per_hour"],
+                               "paper success (AP) %": f"{paper[0]} ({paper[1]})" if paper else "-",
+                               "success - paper (points)": _delta(success, paper and paper[0])})
+        timing.rows.append({"run": f"{label} / {s['set']}", "sensing s": s["mean_sensing_s"],
+                            "planning s": s["mean_plan_s"], "motion s": s["mean_motion_s"],
+                            "cycle s": s["mean_cycle_s"], "success %": success, "picks/hour": s["picks_per_hour"]})
+    sets, policies = ("basic", "typical", "adversarial"), tuple(POLICY_ORDER)
+    novel.rows.sort(key=lambda r: (sets.index(r["set"]) if r["set"] in sets else len(sets),
+                                   policies.index(r["policy"]) if r["policy"] in policies else len(policies)))
+    return [t for t in (novel, known, classified, timing) if t.rows]
+
+
 def build_report(run_dirs: list[Path], out: Path) -> dict[str, Any]:
-    """Write out/report.md, out/index.html and the figures; returns the table rows."""
+    """Write out/report.md, out/index.html and the figures; returns the tables."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -49,60 +147,61 @@ def build_report(run_dirs: list[Path], out: Path) -> dict[str, Any]:
 
     from suctionbench.learning.metrics import precision_recall_curve
 
-    if not run_dirs:
-        raise InputError("report: give at least one run directory")
+    run_dirs = expand_run_dirs(run_dirs)
+    summaries = [summarize_run(run_dir) for run_dir in run_dirs]
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputError(f"output '{out}': cannot create it ({exc.strerror})") from None
-    rows, figures, galleries, per_object = [], [], [], {}
-    fig_pr, ax_pr = plt.subplots(figsize=(5, 4))
-    fig_sa, ax_sa = plt.subplots(figsize=(5, 4))
-    for run_dir in map(Path, run_dirs):
-        summary = summarize_run(run_dir)
-        records = [r for r in _records(run_dir) if r.get("valid")]
-        label = f"{summary['policy']} / {summary['set']}"
-        paper = PAPER_RESULTS.get(summary["policy"], {}).get(summary["set"])
-        rows.append({
-            "policy": summary["policy"], "set": summary["set"], "trials": summary["trials"],
-            "AP": summary["ap"], "success": summary["success_rate"], "label precision": summary["label_precision"],
-            "picks/hour": summary["picks_per_hour"],
-            "paper success (AP)": f"{paper[0]} ({paper[1]})" if paper else "-",
-        })
-        per_object[label] = summary["per_object"]
-        success = np.array([bool(r["success"]) for r in records])
-        q = np.array([np.nan if r.get("policy_q") is None else float(r["policy_q"]) for r in records])
-        if np.isfinite(q).any() and success.any():
-            keep = np.isfinite(q)
-            precision, recall, _ = precision_recall_curve(success[keep], q[keep])
-            ax_pr.plot(recall, precision, label=label)
-            attempt, rate = success_attempt_curve(q[keep], success[keep])
-            ax_sa.plot(attempt, rate, label=label)
-        galleries += _gallery(run_dir, [r for r in _records(run_dir) if not r.get("success")], out, label)
-    for ax, fig, name, (xl, yl) in ((ax_pr, fig_pr, "precision_recall.png", ("recall", "precision")),
-                                    (ax_sa, fig_sa, "success_attempt.png", ("attempt rate", "success rate"))):
-        ax.set_xlabel(xl)
-        ax.set_ylabel(yl)
-        ax.set_ylim(0, 1.02)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
+    galleries, per_object = [], {}
+    curves: dict[str, list[tuple[str, np.ndarray, np.ndarray]]] = {}  # figure group -> (label, q, success)
+    for run_dir, summary in zip(run_dirs, summaries, strict=True):
+        records = _records(run_dir)
+        valid = [r for r in records if r.get("valid")]
+        known = summary["policy"] == "analytic"
+        label = f"{summary['policy']}-{summary['metric']}" if known else summary["policy"]
+        per_object[f"{label} / {summary['set']}"] = summary["per_object"]
+        success = np.array([bool(r["success"]) for r in valid])
+        q = np.array([np.nan if r.get("policy_q") is None else float(r["policy_q"]) for r in valid])
+        keep = np.isfinite(q)
+        if keep.any() and success[keep].any():
+            group = f"{summary['set']}_known" if known else summary["set"]
+            curves.setdefault(group, []).append((label, q[keep], success[keep]))
+        galleries += _gallery(run_dir, [r for r in records if not r.get("success")], out, f"{label} / {summary['set']}")
+    figures = []
+    for group, lines in curves.items():  # one pair of figures per set, so the lines stay readable
+        fig, (ax_pr, ax_sa) = plt.subplots(1, 2, figsize=(10, 4))
+        for label, q, success in lines:
+            precision, recall, _ = precision_recall_curve(success, q)
+            ax_pr.plot(recall, precision, label=label, lw=1)
+            ax_sa.plot(*success_attempt_curve(q, success), label=label, lw=1)
+        for ax, (xl, yl) in ((ax_pr, ("recall", "precision")), (ax_sa, ("attempt rate", "success rate"))):
+            ax.set_xlabel(xl)
+            ax.set_ylabel(yl)
+            ax.set_ylim(0, 1.02)
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=7)
+            ax.set_title(f"{group.replace('_', ' ')}: {yl} vs {xl}", fontsize=9)
         fig.tight_layout()
+        name = f"curves_{group}.png"
         with atomic_path(out / name) as tmp:
-            fig.savefig(tmp, format="png", dpi=120)
+            fig.savefig(tmp, format="png", dpi=110)
         plt.close(fig)
         figures.append(name)
-    _write_markdown(out, rows, figures, per_object, galleries)
-    _write_html(out, rows, figures, per_object, galleries)
-    return {"out": str(out), "rows": rows}
+    tables = _tables(summaries)
+    _write_markdown(out, tables, figures, per_object, galleries)
+    _write_html(out, tables, figures, per_object, galleries)
+    return {"out": str(out), "tables": {t.title: t.rows for t in tables},
+            "rows": tables[0].rows if tables else []}
 
 
 def _gallery(run_dir: Path, failed: list[dict[str, Any]], out: Path, label: str) -> list[tuple[str, str]]:
-    """Depth crops (96 x 96 px) around the executed grasp of up to GALLERY_SIZE failed trials."""
+    """Depth crops (96 x 96 px) around the executed grasp of up to GALLERY_PER_RUN failed trials."""
     from suctionbench.runlog.reader import depth_image, iter_messages
     from suctionbench.sensing.image import save_png
 
     items = []
-    for r in failed[: GALLERY_SIZE // 2]:
+    for r in failed[:GALLERY_PER_RUN]:
         path = Path(r["_path"])
         depth_msgs = list(iter_messages(path, "/camera/depth"))
         calib = list(iter_messages(path, "/camera/calibration"))
@@ -155,16 +254,19 @@ def _fmt(value: Any) -> str:
     return "-" if value is None else f"{value:.3g}" if isinstance(value, float) else str(value)
 
 
-def _write_markdown(out: Path, rows, figures, per_object, galleries) -> None:
-    lines = ["# suctionbench report", "", "Built from the MCAP logs of the runs by `suctionbench report`.", ""]
-    lines += ["| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]
-    lines += ["| " + " | ".join(_fmt(v) for v in row.values()) + " |" for row in rows]
-    lines += ["", "Paper: physical YuMi trials (Dex-Net 3.0, FACTS.md section 5); ours: simulation. Where they",
-              "disagree the simulation is reported as is, never tuned toward the paper.", ""]
-    lines += [f"![{f}]({f})" for f in figures]
+def _write_markdown(out: Path, tables: list[Table], figures, per_object, galleries) -> None:
+    lines = ["# suctionbench report", "", "Built from the MCAP logs of the runs by `suctionbench report`. Ours: "
+             "simulation; where it disagrees with the paper's physical trials it is reported as is, never "
+             "tuned toward them.", ""]
+    for table in tables:
+        keys = list(table.rows[0])
+        lines += [f"## {table.title}", "", table.note, "", "| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
+        lines += ["| " + " | ".join(_fmt(row[k]) for k in keys) + " |" for row in table.rows]
+        lines.append("")
+    lines += ["## Curves", ""] + [f"![{f}]({f})" for f in figures]
     lines += ["", "## Per object (successes / trials)", ""]
-    for label, table in per_object.items():
-        lines.append(f"**{label}**: " + ", ".join(f"{k.split('/')[-1]} {s}/{n}" for k, (s, n) in table.items()))
+    for label, counts in per_object.items():
+        lines.append(f"**{label}**: " + ", ".join(f"{k.split('/')[-1]} {s}/{n}" for k, (s, n) in counts.items()))
         lines.append("")
     lines += ["## Failures (depth around the executed grasp)", ""]
     lines += [f"![{caption}]({name}) {caption}  " for name, caption in galleries]
@@ -172,23 +274,29 @@ def _write_markdown(out: Path, rows, figures, per_object, galleries) -> None:
         tmp.write_text("\n".join(lines) + "\n")
 
 
-def _write_html(out: Path, rows, figures, per_object, galleries) -> None:
+def _write_html(out: Path, tables: list[Table], figures, per_object, galleries) -> None:
     esc = html.escape
-    head = "".join(f"<th>{esc(k)}</th>" for k in rows[0])
-    body = "".join("<tr>" + "".join(f"<td>{esc(_fmt(v))}</td>" for v in row.values()) + "</tr>" for row in rows)
+    sections = []
+    for table in tables:
+        keys = list(table.rows[0])
+        head = "".join(f"<th>{esc(k)}</th>" for k in keys)
+        body = "".join("<tr>" + "".join(f"<td>{esc(_fmt(row[k]))}</td>" for k in keys) + "</tr>" for row in table.rows)
+        sections.append(f"<h2>{esc(table.title)}</h2><p>{esc(table.note)}</p><table><tr>{head}</tr>{body}</table>")
     objects = "".join(
         f"<h3>{esc(label)}</h3><p>" + ", ".join(f"{esc(k.split('/')[-1])} {s}/{n}" for k, (s, n) in t.items()) + "</p>"
         for label, t in per_object.items()
     )
     gallery = "".join(
-        f'<figure><img src="{esc(n)}" width="192"><figcaption>{esc(c)}</figcaption></figure>' for n, c in galleries
+        f'<figure><img src="{esc(n)}" width="192" alt="{esc(c)}"><figcaption>{esc(c)}</figcaption></figure>'
+        for n, c in galleries
     )
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>suctionbench report</title>
-<style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}td,th{{border:1px solid #999;
-padding:4px 8px}}figure{{display:inline-block;margin:4px}}</style></head><body>
-<h1>suctionbench report</h1><p>Built from the MCAP logs of the runs. Paper: physical trials (FACTS.md section 5);
-ours: simulation, reported as is.</p><table><tr>{head}</tr>{body}</table>
-{"".join(f'<img src="{esc(f)}" alt="{esc(f)}">' for f in figures)}
+<style>body{{font-family:sans-serif;margin:2em;max-width:80em}}table{{border-collapse:collapse;margin-bottom:1em}}
+td,th{{border:1px solid #999;padding:4px 8px;text-align:right}}td:first-child,th{{text-align:left}}
+figure{{display:inline-block;margin:4px;width:192px;font-size:small}}</style></head><body>
+<h1>suctionbench report</h1><p>Built from the MCAP logs of the runs. Ours: simulation; where it disagrees with the
+paper's physical trials it is reported as is, never tuned toward them.</p>
+{"".join(sections)}<h2>Curves</h2>{"".join(f'<img src="{esc(f)}" alt="{esc(f)}">' for f in figures)}
 <h2>Per object (successes / trials)</h2>{objects}<h2>Failures</h2>{gallery}</body></html>"""
     with atomic_path(out / "index.html") as tmp:
         tmp.write_text(page)

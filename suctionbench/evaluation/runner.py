@@ -124,35 +124,62 @@ def summarize_run(run_dir: Path) -> dict[str, Any]:
             "metric": run.get("metric"), **trial_metrics(records)}
 
 
-def trial_metrics(records: list[dict[str, Any]]) -> dict[str, Any]:
-    """AP of the policy's q against simulated success, success rate, analytic-label precision,
-    picks per hour, Spearman rank correlation of q with success, and outcome counts."""
+def score_stats(scores: np.ndarray, success: np.ndarray) -> dict[str, float | None]:
+    """How well scores in [0, 1] predict simulated success: average precision, accuracy of the
+    0.5 threshold and Spearman rank correlation (the paper's classification columns); NaN scores
+    are left out, and a statistic that is undefined (no success, constant input) is None."""
     from scipy.stats import spearmanr
 
     from suctionbench.learning.metrics import average_precision
 
+    keep = np.isfinite(scores)
+    scores, success = scores[keep], success[keep]
+    if not len(scores):
+        return {"ap": None, "accuracy": None, "spearman": None}
+    ap = float(average_precision(success, scores)) if success.any() else None
+    rho = None
+    if len(scores) > 2 and success.std() > 0 and scores.std() > 0:
+        rho = float(spearmanr(scores, success).statistic)
+    return {
+        "ap": None if ap is None else round(ap, 4),
+        "accuracy": round(float(((scores > 0.5) == success).mean()), 4),
+        "spearman": None if rho is None or math.isnan(rho) else round(rho, 4),
+    }
+
+
+def trial_metrics(records: list[dict[str, Any]]) -> dict[str, Any]:
+    """AP of the policy's q against simulated success, success rate, analytic-label precision,
+    picks per hour with the mean time per phase, how well each 3D metric's score of the executed
+    grasp predicts success, and outcome counts."""
     valid = [r for r in records if r.get("valid")]
     success = np.array([bool(r["success"]) for r in valid])
     q = np.array([np.nan if r.get("policy_q") is None else float(r["policy_q"]) for r in valid])
     rwr = np.array([float(r["label_rwr"]) for r in valid])
-    has_q = np.isfinite(q)
-    ap = float(average_precision(success[has_q], q[has_q])) if has_q.any() and success[has_q].any() else None
+    q_stats = score_stats(q, success)
     predicted = rwr > PREDICT_THRESHOLD
-    cycle = np.array([r.get("sensing_time", 0.0) + r.get("plan_time", 0.0) + r["sim_time"] for r in valid])
+    phases = {name: np.array([float(r.get(key) or 0.0) for r in valid])
+              for name, key in (("sensing", "sensing_time"), ("plan", "plan_time"), ("motion", "sim_time"))}
+    cycle = sum(phases.values()) if valid else np.zeros(0)
     rate = float(success.mean()) if len(valid) else 0.0
-    rho = spearmanr(q[has_q], success[has_q]).statistic if has_q.sum() > 2 and success[has_q].std() > 0 else None
+    scored = [r for r in valid if r.get("label_scores")]
+    by_metric = {
+        name: score_stats(np.array([r["label_scores"][name] for r in scored]),
+                          np.array([bool(r["success"]) for r in scored]))
+        for name in (scored[0]["label_scores"] if scored else ())
+    }
     return {
         "trials": len(records),
         "invalid": len(records) - len(valid),
         "success_rate": round(rate, 4),
-        "ap": None if ap is None else round(ap, 4),
-        "accuracy_q": round(float(((q[has_q] > 0.5) == success[has_q]).mean()), 4) if has_q.any() else None,
-        "spearman_q": None if rho is None or math.isnan(rho) else round(float(rho), 4),
+        "ap": q_stats["ap"],
+        "accuracy_q": q_stats["accuracy"],
+        "spearman_q": q_stats["spearman"],
         "label_precision": round(float(success[predicted].mean()), 4) if predicted.any() else None,
         "label_positive_rate": round(float(predicted.mean()), 4) if len(valid) else None,
         "mean_cycle_s": round(float(cycle.mean()), 3) if len(valid) else None,
         "picks_per_hour": round(3600.0 * rate / float(cycle.mean()), 1) if len(valid) and cycle.mean() > 0 else None,
-        "mean_plan_s": round(float(np.mean([r.get("plan_time", 0.0) for r in valid])), 4) if valid else None,
+        **{f"mean_{name}_s": round(float(t.mean()), 4) if len(valid) else None for name, t in phases.items()},
+        "by_metric": by_metric,
         "outcomes": dict(sorted(Counter(r["failure"] or "success" for r in records).items())),
         "per_object": _per_object(valid),
     }

@@ -1,0 +1,137 @@
+"""Reports: tables computed from run logs (real smoke run and synthetic logs with known numbers),
+and the HTML checked in a real browser (headless Chromium; skipped where Chromium is absent)."""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+from typer.testing import CliRunner
+
+from suctionbench.cli import app
+from suctionbench.evaluation.report import build_report, expand_run_dirs, success_attempt_curve
+from suctionbench.runlog.writer import EpisodeLog
+
+CHROMIUM = next((shutil.which(n) for n in ("chromium", "chromium-browser", "google-chrome") if shutil.which(n)), None)
+CHROMIUM_FLAGS = [  # headless on a closed network: no background connections, a throwaway profile
+    "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+    "--disable-background-networking", "--disable-component-update", "--disable-sync", "--hide-scrollbars",
+]
+
+
+@pytest.fixture(scope="module")
+def smoke_report(tmp_path_factory):
+    """A real smoke run of the centroid policy and its report."""
+    root = tmp_path_factory.mktemp("smoke")
+    result = CliRunner().invoke(app, ["eval", "--policy", "centroid", "--task", "smoke", "--workers", "1",
+                                      "--out", str(root / "run"), "--json"])
+    assert result.exit_code == 0, result.output
+    return build_report([root / "run"], root / "report"), root / "report"
+
+
+def test_report_from_a_smoke_run(smoke_report):
+    report, out = smoke_report
+    row = report["rows"][0]
+    assert row["policy"] == "centroid" and row["paper success (AP) %"] == "92 (89)"
+    assert row["success - paper (points)"] == f"{row['success %'] - 92:+.0f}"
+    page = (out / "index.html").read_text()
+    images = re.findall(r'<img src="([^"]+)"', page)
+    assert images and all((out / name).is_file() for name in ["report.md", *images])
+    # two tables (policies x sets, timing), each a header row and one run row
+    assert page.count("<table>") == 2 and page.count("<tr>") == 4 and "centroid" in page
+    # success among the attempted grasps as the attempt rate grows (sorted by q, best first)
+    attempt, rate = success_attempt_curve(np.array([0.9, 0.1, 0.5]), np.array([True, False, False]))
+    np.testing.assert_allclose(attempt, [1 / 3, 2 / 3, 1.0])
+    np.testing.assert_allclose(rate, [1.0, 0.5, 1 / 3])
+
+
+def _synthetic_run(path: Path, policy: str, metric: str, results: list[dict]) -> Path:
+    """A run directory as `eval` writes it, with only result records in its logs."""
+    (path / "trials").mkdir(parents=True)
+    task = {"name": "known_objects", "set": "adversarial", "trials": len(results), "placement": "stable",
+            "seed": 0, "stable_poses": 3, "metrics": ["pc3d", "ss", "wr", "rwr"], "description": ""}
+    (path / "run.json").write_text(json.dumps({"task": task, "policy": policy, "model": None, "metric": metric,
+                                               "cup": "default", "trials": len(results), "seed": 0}))
+    for i, result in enumerate(results):
+        record = {"object": f"adversarial/obj{i % 3}", "valid": True, "failure": None if result["success"] else
+                  "no_seal", "label_rwr": 0.0, "sim_time": 4.0, "plan_time": 0.5, "sensing_time": 0.0, **result}
+        with EpisodeLog(path / "trials" / f"trial_{i:05d}.mcap", {"policy": policy}) as log:
+            log.log_result(1.0, record)
+    return path
+
+
+def test_known_objects_tables_from_logs(tmp_path):
+    # Top-ranked grasps: q ranks the two successes first -> AP 1, success 2/4.
+    known = _synthetic_run(tmp_path / "analytic" / "rwr", "analytic", "rwr", [
+        {"success": s, "policy_q": q} for s, q in ((True, 0.9), (False, 0.2), (True, 0.8), (False, 0.1))])
+    # Random grasps: ss ranks successes first (AP 1, all on the right side of 0.5: accuracy 1,
+    # Spearman of ranks (4,3,2,1) with tied success ranks (3.5,3.5,1.5,1.5) = 4 / (2 sqrt 5) =
+    # sqrt 0.8); pc3d ranks them last: precision 1/3 at recall 1/2 and 2/4 at recall 1, so step-wise
+    # AP = (1/3 + 1/2) / 2 = 5/12, accuracy 0, Spearman -sqrt 0.8.
+    grasps = [(True, 0.9, 0.1), (True, 0.8, 0.2), (False, 0.3, 0.7), (False, 0.2, 0.6)]
+    random = _synthetic_run(tmp_path / "random", "random-surface", "rwr", [
+        {"success": s, "policy_q": None, "label_scores": {"ss": a, "pc3d": b}} for s, a, b in grasps])
+    assert expand_run_dirs([tmp_path / "analytic"]) == [known]  # a directory of runs is expanded
+    report = build_report([tmp_path / "analytic", random], tmp_path / "report")
+    top = report["tables"]["Known objects: top-ranked grasp per 3D metric"]
+    assert top == [{"metric": "rwr", "set": "adversarial", "trials": 4, "AP %": 100.0, "success %": 50.0,
+                    "paper AP / success %": "100 / 92", "success - paper (points)": "-42"}]
+    rows = {r["metric"]: r for r in report["tables"]["Known objects: random-grasp classification"]}
+    assert (rows["ss"]["AP %"], rows["ss"]["accuracy %"], rows["ss"]["successes"]) == (100.0, 100.0, 2)
+    assert rows["ss"]["Spearman"] == pytest.approx(np.sqrt(0.8), abs=1e-3)  # ranks 1..4 vs 0,0,1,1
+    assert (rows["pc3d"]["AP %"], rows["pc3d"]["accuracy %"]) == (41.7, 0.0)
+    assert rows["pc3d"]["Spearman"] == pytest.approx(-np.sqrt(0.8), abs=1e-3)
+    assert rows["ss"]["paper AP / acc. % / Spearman"] == "75 / 74 / 0.49"
+    assert "Known objects: random-grasp classification" in (tmp_path / "report" / "report.md").read_text()
+
+
+def test_report_bad_input(tmp_path):
+    result = CliRunner().invoke(app, ["report", str(tmp_path / "nope"), "--out", str(tmp_path / "r"), "--json"])
+    assert result.exit_code == 2 and "no run.json" in json.loads(result.stdout.strip().splitlines()[-1])["error"]
+    assert not (tmp_path / "r").exists()  # nothing half-written
+
+
+def _chromium(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    profile = cwd / "chromium-profile"
+    return subprocess.run([CHROMIUM, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args], cwd=cwd,
+                          capture_output=True, text=True, timeout=120, check=False)
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="Chromium is not installed (CI installs it)")
+def test_report_renders_in_headless_chromium(smoke_report, tmp_path):
+    _, out = smoke_report
+    page = (out / "index.html").read_text()
+    # 1. In the browser every image has loaded and decoded, and nothing overflows a 1280 px window:
+    #    a probe script (added to a copy; the report itself has no scripts) writes what it found
+    #    into the DOM, which --dump-dom prints after the load event.
+    probe = ("<script>addEventListener('load', () => { const b = document.body;"
+             " b.dataset.images = document.images.length;"
+             " b.dataset.broken = [...document.images].filter(i => !(i.complete && i.naturalWidth > 0)).length;"
+             " b.dataset.overflow = document.documentElement.scrollWidth > innerWidth; });</script>")
+    probed = out / "probe.html"
+    probed.write_text(page.replace("</body>", probe + "</body>"))
+    try:
+        dom = _chromium("--window-size=1280,1024", "--virtual-time-budget=10000", "--dump-dom",
+                        probed.as_uri(), cwd=tmp_path)
+    finally:
+        probed.unlink()
+    assert dom.returncode == 0, dom.stderr[-2000:]
+    found = dict(re.findall(r'data-(images|broken|overflow)="([^"]*)"', dom.stdout))
+    expected_images = page.count("<img ")
+    assert found == {"images": str(expected_images), "broken": "0", "overflow": "false"}, found
+    assert expected_images >= 1  # curves (a success) or the gallery (a failure)
+    # 2. The screenshot shows a rendered page: text and table rules (dark pixels) and the figures.
+    shot = tmp_path / "report.png"
+    run = _chromium("--window-size=1280,2400", f"--screenshot={shot}", (out / "index.html").as_uri(), cwd=tmp_path)
+    assert run.returncode == 0 and shot.is_file(), run.stderr[-2000:]
+    pixels = np.asarray(Image.open(shot).convert("L"), dtype=float)
+    assert pixels.shape == (2400, 1280)
+    dark = pixels < 100
+    assert 0.002 < dark.mean() < 0.3  # neither blank nor a black page
+    assert dark[:300].any(axis=1).sum() > 20  # the heading and the first table at the top

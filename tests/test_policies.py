@@ -3,6 +3,8 @@ object per set, the GQ-CNN cross-entropy policy with stub scorers, determinism a
 
 from __future__ import annotations
 
+import dataclasses
+
 import math
 
 import numpy as np
@@ -127,6 +129,22 @@ def test_segmentation_without_mask_matches_the_object(scenes):
         assert (cloud.object_mask != scene.mask).sum() < 0.02 * scene.mask.sum()
         assert cloud.valid.any() and not cloud.relaxed
         assert not (cloud.valid & ~cloud.object_mask).any()
+
+
+def test_object_cut_by_the_image_border(scenes):
+    # An object running off the bottom-right of the image (cropping there keeps cx, cy): the
+    # normals' window around the object must stay inside the image (regression: a window past the
+    # border crashed planning on typical objects near the frame's edge).
+    scene = scenes["basic/box_tea"]
+    rows, cols = np.nonzero(scene.mask)
+    height, width = int(rows.max()) - 5, int(cols.max()) - 5
+    intrinsics = dataclasses.replace(PRIMESENSE, width=width, height=height)
+    mask = scene.mask[:height, :width]
+    observation = Observation(scene.depth[:height, :width], intrinsics, scene.camera_pose, mask=mask)
+    cloud = scene_cloud(observation, SamplerConfig())
+    assert (cloud.object_mask == mask).all() and cloud.valid.any()
+    action = make_policy("planarity-centroid").plan(observation, np.random.default_rng(0))
+    assert mask[int(round(action.pixel[1])), int(round(action.pixel[0]))]
 
 
 def test_empty_scene_raises_no_grasp():

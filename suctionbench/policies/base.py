@@ -361,7 +361,8 @@ def scene_cloud(observation: Observation, config: SamplerConfig) -> SceneCloud:
     # plus the gradient's neighbour leaves every object pixel's normal as on the whole image.
     margin = math.ceil(4.0 * config.depth_sigma) + 2
     occupied = np.argwhere(object_mask)
-    (r0, c0), (r1, c1) = np.maximum(occupied.min(axis=0) - margin, 0), occupied.max(axis=0) + margin
+    (r0, c0) = np.maximum(occupied.min(axis=0) - margin, 0)
+    (r1, c1) = np.minimum(occupied.max(axis=0) + margin, np.array(depth.shape) - 1)  # inside the image
     roi = (slice(r0, r1 + 1), slice(c0, c1 + 1))
     smooth = smooth_depth(depth[roi], config.depth_sigma)
     v, u = np.mgrid[roi]

@@ -81,3 +81,26 @@ def test_eval_unwritable_output_exits_2():
 def test_report_bad_input(tmp_path):
     result = CliRunner().invoke(app, ["report", str(tmp_path / "nope"), "--out", str(tmp_path / "r"), "--json"])
     assert result.exit_code == 2
+
+
+def test_a_policy_that_finds_no_grasp_fails_the_trial_without_executing(tmp_path, monkeypatch):
+    # An observation with no object pixel (as when the object lies out of view): the policy raises
+    # NoGraspError; the trial is a valid failure "no_grasp", logged, and the run's table counts it.
+    from suctionbench.evaluation.runner import trial_metrics
+    from suctionbench.sim.pick import PickRequest, PickRunner
+
+    real_observe = PickRunner.observe
+
+    def empty_view(self):
+        observation = real_observe(self)
+        observation.mask[:] = False
+        return observation
+
+    monkeypatch.setattr(PickRunner, "observe", empty_view)
+    log = tmp_path / "trial.mcap"
+    result = PickRunner(PickRequest("basic/box_tea", policy="centroid", seed=3)).run(log=log)
+    assert result["valid"] and not result["success"] and result["failure"] == "no_grasp"
+    assert result["grasp_world"] is None and result["sim_time"] == 0.0 and "no object pixel" in result["detail"]
+    assert read_run(tmp_path)[0]["result"]["failure"] == "no_grasp"
+    table = trial_metrics([result])
+    assert table["success_rate"] == 0.0 and table["outcomes"] == {"no_grasp": 1} and table["label_precision"] is None

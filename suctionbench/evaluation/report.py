@@ -201,7 +201,7 @@ def _gallery(run_dir: Path, failed: list[dict[str, Any]], out: Path, label: str)
     from suctionbench.sensing.image import save_png
 
     items = []
-    for r in failed[:GALLERY_PER_RUN]:
+    for r in [r for r in failed if r.get("grasp_world")][:GALLERY_PER_RUN]:  # failures that executed a grasp
         path = Path(r["_path"])
         depth_msgs = list(iter_messages(path, "/camera/depth"))
         calib = list(iter_messages(path, "/camera/calibration"))

@@ -154,7 +154,7 @@ def trial_metrics(records: list[dict[str, Any]]) -> dict[str, Any]:
     valid = [r for r in records if r.get("valid")]
     success = np.array([bool(r["success"]) for r in valid])
     q = np.array([np.nan if r.get("policy_q") is None else float(r["policy_q"]) for r in valid])
-    rwr = np.array([float(r["label_rwr"]) for r in valid])
+    rwr = np.array([np.nan if r.get("label_rwr") is None else float(r["label_rwr"]) for r in valid])
     q_stats = score_stats(q, success)
     predicted = rwr > PREDICT_THRESHOLD
     phases = {name: np.array([float(r.get(key) or 0.0) for r in valid])

@@ -26,6 +26,7 @@ from suctionbench.sim.scene import Scene
 from suctionbench.sim.yumi import HOME_RIGHT, JOINT_SPEED_LIMITS, RIGHT_ARM_JOINTS
 
 FAILURES = (
+    "no_grasp",
     "unreachable",
     "collision",
     "no_seal",
@@ -35,7 +36,8 @@ FAILURES = (
     "not_lifted",
     "unstable",
 )
-"""Failure reasons, in the order of the episode's phases."""
+"""Failure reasons, in the order of the episode's phases ("no_grasp": the image policy found no
+grasp in the observation, so nothing was executed)."""
 
 
 @dataclass(frozen=True)

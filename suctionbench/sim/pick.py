@@ -18,6 +18,7 @@ from suctionbench.contact.metrics import METRICS
 from suctionbench.errors import InputError
 from suctionbench.objects.build import ObjectRecord
 from suctionbench.objects.registry import load_object
+from suctionbench.policies.base import NoGraspError
 from suctionbench.sensing.camera import CameraPoseConfig, resolve_camera, sample_camera_pose
 from suctionbench.sim.episode import EpisodeConfig, PickEpisode
 from suctionbench.sim.scene import SceneConfig, build_scene
@@ -172,7 +173,10 @@ class PickRunner:
             point, approach = chosen.point, chosen.approach
             q = None if np.isnan(chosen.score) else chosen.score
         else:
-            chosen = self._plan_from_image()
+            try:
+                chosen = self._plan_from_image()
+            except NoGraspError as exc:  # the policy's failure: recorded, nothing executed
+                return self._no_grasp(str(exc), placement_time, time.perf_counter() - plan_start, log)
             point, approach = chosen.point, chosen.approach
             q = None if np.isnan(chosen.score) else chosen.score
         plan_time = time.perf_counter() - plan_start - self._sensing_time
@@ -194,6 +198,23 @@ class PickRunner:
             "sensing_time": self._sensing_time,
             "plan_time": plan_time,
             **result.to_dict(),
+        }
+        if log is not None:
+            log.log_result(float(self.episode.data.time), record)
+        return record
+
+    def _no_grasp(self, reason: str, placement_time: float, elapsed: float, log: Any) -> dict[str, Any]:
+        """The record of a trial whose image policy found no grasp: a valid, failed pick."""
+        from suctionbench.sim.episode import EpisodeResult
+
+        req = self.request
+        result = EpisodeResult(success=False, failure="no_grasp", valid=True, seal_time=None, peak_slip=0.0,
+                               lifted=False, in_bin=False, sim_time=0.0, wall_time=0.0, detail=reason)
+        record = {
+            "object": req.object_key, "seed": req.seed, "placement": req.placement, "grasp_world": None,
+            "policy_q": None, "label_seal": None, "label_wr": None, "label_rwr": None, "label_scores": None,
+            "placement_time": placement_time, "sensing_time": self._sensing_time,
+            "plan_time": elapsed - self._sensing_time, **result.to_dict(),
         }
         if log is not None:
             log.log_result(float(self.episode.data.time), record)

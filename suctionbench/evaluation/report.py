@@ -87,6 +87,13 @@ def _delta(ours: float | None, paper: float | None) -> str:
     return "-" if ours is None or paper is None else f"{ours - paper:+.0f}"
 
 
+def _order(set_name: str, policy: str) -> tuple[int, int, str]:
+    """Rows by set (basic, typical, adversarial, others), then by policy (POLICY_ORDER, others)."""
+    sets = ("basic", "typical", "adversarial")
+    return (sets.index(set_name) if set_name in sets else len(sets),
+            POLICY_ORDER.index(policy) if policy in POLICY_ORDER else len(POLICY_ORDER), policy)
+
+
 def _tables(summaries: list[dict[str, Any]]) -> list[Table]:
     """The report's tables: policies x sets, known objects per metric, random-grasp
     classification per metric, and where the time of a pick goes."""
@@ -132,9 +139,9 @@ def _tables(summaries: list[dict[str, Any]]) -> list[Table]:
         timing.rows.append({"run": f"{label} / {s['set']}", "sensing s": s["mean_sensing_s"],
                             "planning s": s["mean_plan_s"], "motion s": s["mean_motion_s"],
                             "cycle s": s["mean_cycle_s"], "success %": success, "picks/hour": s["picks_per_hour"]})
-    sets, policies = ("basic", "typical", "adversarial"), tuple(POLICY_ORDER)
-    novel.rows.sort(key=lambda r: (sets.index(r["set"]) if r["set"] in sets else len(sets),
-                                   policies.index(r["policy"]) if r["policy"] in policies else len(policies)))
+    novel.rows.sort(key=lambda r: _order(r["set"], r["policy"]))
+    timing.rows.sort(key=lambda r: _order(*reversed(r["run"].split(" / "))))
+    known.rows.sort(key=lambda r: list(PAPER_KNOWN).index(r["metric"]) if r["metric"] in PAPER_KNOWN else 0)
     return [t for t in (novel, known, classified, timing) if t.rows]
 
 
@@ -169,7 +176,8 @@ def build_report(run_dirs: list[Path], out: Path) -> dict[str, Any]:
             curves.setdefault(group, []).append((label, q[keep], success[keep]))
         galleries += _gallery(run_dir, [r for r in records if not r.get("success")], out, f"{label} / {summary['set']}")
     figures = []
-    for group, lines in curves.items():  # one pair of figures per set, so the lines stay readable
+    for group in sorted(curves, key=lambda g: _order(g.removesuffix("_known"), "") + (g,)):
+        lines = curves[group]  # one pair of figures per set, so the lines stay readable
         fig, (ax_pr, ax_sa) = plt.subplots(1, 2, figsize=(10, 4))
         for label, q, success in lines:
             precision, recall, _ = precision_recall_curve(success, q)

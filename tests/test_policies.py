@@ -4,7 +4,6 @@ object per set, the GQ-CNN cross-entropy policy with stub scorers, determinism a
 from __future__ import annotations
 
 import dataclasses
-
 import math
 
 import numpy as np

@@ -256,8 +256,8 @@ class SuctionPickEnv(gymnasium.Env):
             self.last_wall_time = None
             info.update(
                 success=False, valid=True, failure="invalid_action", detail=None, label_seal=None, label_wr=None,
-                label_rwr=None, label_scores=None, grasp_world=None, seal_time=None, sim_time=0.0, peak_slip=0.0, lifted=False,
-                in_bin=False, phases={},
+                label_rwr=None, label_scores=None, grasp_world=None, seal_time=None, sim_time=0.0, peak_slip=0.0,
+                lifted=False, in_bin=False, phases={},
             )
         else:
             rotation, origin = runner.camera_pose[:3, :3], runner.camera_pose[:3, 3]

@@ -151,3 +151,26 @@ def test_bad_inputs(tmp_path):
     with pytest.raises(InputError, match="engine"):
         record = load_object(KEYS[0])
         gen.generate_dataset(tmp_path / "z", [str(record.directory)], KEYS[:1], "primesense", CONFIG, engine="spark")
+
+
+def test_smoothed_approaches_blend_faces_at_edges_like_a_depth_normal():
+    import trimesh
+
+    from suctionbench.geometry.sampling import smoothed_approaches
+
+    # 10 cm cube, 3 mm ball. Face centre: only the top face -> exactly its normal. On the edge
+    # between top (+z) and side (+x): equal areas of both faces in the ball -> the bisector. 1 mm
+    # inside the edge: the side holds a half disc of radius sqrt(3^2 - 1^2) mm (12.6 mm^2), the top
+    # the disc less the 1 mm segment (28.3 - 8.25 = 20.0 mm^2) -> approach ~ -(12.6, 0, 20.0)/|.|.
+    box = trimesh.creation.box((0.1, 0.1, 0.1))
+    points = np.array([[0.0, 0.0, 0.05], [0.05, 0.0, 0.05], [0.049, 0.0, 0.05]])
+    down = np.tile([0.0, 0.0, -1.0], (3, 1))
+    smoothed = smoothed_approaches(box, points, down, 0.003, np.random.default_rng(0))
+    expected = np.array([[0, 0, -1.0], [-1.0, 0, -1.0], [-12.57, 0, -20.0]])
+    expected /= np.linalg.norm(expected, axis=1, keepdims=True)
+    angles = np.degrees(np.arccos(np.clip(np.sum(smoothed * expected, axis=1), -1, 1)))
+    assert angles[0] == 0.0 and angles[1] < 6.0 and angles[2] < 6.0  # ~100 samples per disc: a few deg
+    # A 2 mm plate: the far face (opposite normal) is left out, so the top keeps its normal.
+    plate = trimesh.creation.box((0.1, 0.1, 0.002))
+    flat = smoothed_approaches(plate, np.array([[0.0, 0.0, 0.001]]), down[:1], 0.003, np.random.default_rng(0))
+    np.testing.assert_allclose(flat, down[:1])

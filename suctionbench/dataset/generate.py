@@ -60,6 +60,17 @@ class GenerationConfig:
     max_approach_angle: float = math.radians(80.0)
     """Grasps whose approach is further than this from straight down are not recorded."""
 
+    smoothed_approach_fraction: float = 0.5
+    """Share of the candidates whose approach is the surface normal averaged over
+    `approach_smoothing_radius` (as image-based policies estimate it from depth) instead of the
+    exact face normal. Without them the network never sees, say, a straight-down approach on a
+    prism's ridge - the grasp every depth-normal sampler proposes there. Labels are always
+    computed for the approach actually recorded."""
+
+    approach_smoothing_radius: float = 0.003
+    """Radius (m) of that average: about the support of the policies' normal estimate (1 px
+    Gaussian + central differences, ~3 px = ~3 mm at 0.6 m)."""
+
     max_images_per_object: int = 400
     """An object whose visible grasps cannot fill its quota stops after this many images."""
 
@@ -103,7 +114,7 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
     """Generate one unit's datapoints (runs in a worker process or a Ray task)."""
     from suctionbench.contact import SuctionLabeller
     from suctionbench.dataset.render import TableScene
-    from suctionbench.geometry.sampling import sample_surface_grasps
+    from suctionbench.geometry.sampling import sample_surface_grasps, smoothed_approaches
     from suctionbench.objects.build import ObjectRecord
     from suctionbench.sensing.camera import CameraPoseConfig, resolve_camera, sample_camera_pose
     from suctionbench.sensing.noise import apply_depth_noise
@@ -114,6 +125,10 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
     intrinsics = resolve_camera(camera)
     mesh = record.mesh()
     points, approaches = sample_surface_grasps(mesh, config.grasps_per_object, rng)
+    if config.smoothed_approach_fraction > 0.0:
+        smoothed = smoothed_approaches(mesh, points, approaches, config.approach_smoothing_radius, rng)
+        use = rng.random(len(points)) < config.smoothed_approach_fraction
+        approaches = np.where(use[:, None], smoothed, approaches)
     poses = [np.asarray(p["transform"]) for p in record.stable_poses[: config.stable_poses]]
     labels: dict[int, Any] = {}
 

@@ -44,7 +44,7 @@ class ContractGroup(typer.core.TyperGroup):
             exc.show()
             _emit({"ok": False, "error": exc.format_message()}, "--json" in argv)
             rv = exc.exit_code
-        except typer.core._click.exceptions.Abort:
+        except typer.exceptions.Abort:  # Ctrl-C, or a closed pipe under --help
             err.print("aborted")
             rv = 1
         code = rv if isinstance(rv, int) else 0

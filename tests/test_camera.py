@@ -301,6 +301,26 @@ def _interior(label):
     return lo == hi
 
 
+def test_segmentation_shares_the_depth_renderer_and_matches_the_ray_cast(gl_available):
+    # The segmentation drawn by the depth renderer's own context labels every interior pixel with
+    # the geom the analytic ray cast hits (the marker site is hidden, as in depth), and switching
+    # to it and back leaves the depth image bit-identical.
+    pose = sample_camera_pose(np.random.default_rng(4), np.array([0.02, 0.0, 0.0]), CameraPoseConfig())
+    model, data = _scene(PRIMESENSE, pose)
+    with DepthRenderer(model, PRIMESENSE) as renderer:
+        before = renderer.render(data, "cam")
+        segmentation = renderer.segment(data, "cam")
+        after = renderer.render(data, "cam")
+    np.testing.assert_array_equal(before, after)
+    _, label = _raycast(PRIMESENSE, pose)
+    inside = _interior(label) & (label != NOTHING)
+    geom_of = {PLANE: model.geom("floor").id, BOX: model.geom("box").id, SPHERE: model.geom("ball").id}
+    expected = np.vectorize(geom_of.get)(label)
+    is_geom = segmentation[..., 1] == mujoco.mjtObj.mjOBJ_GEOM
+    assert is_geom[inside].all()
+    assert (segmentation[..., 0][inside] == expected[inside]).mean() > 0.999
+
+
 OFF_CENTRE = CameraIntrinsics("off-centre", 640, 480, 540.0, 505.0, 290.0, 262.0, 0.3, 1.5)
 """fx != fy and a principal point 29.5 px left of and 22.5 px below the image centre."""
 

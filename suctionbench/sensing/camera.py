@@ -513,10 +513,32 @@ class DepthRenderer:
     def render(self, data: mujoco.MjData, camera_name: str) -> np.ndarray:
         """Depth image (H, W) float32 in metres along the optical axis; 0 where nothing is hit
         (including beyond the far clip plane)."""
+        cam_id = self._camera_id(camera_name)
+        self._renderer.update_scene(data, camera=cam_id, scene_option=self._option)
+        depth = self._renderer.render()
+        depth[depth >= self._background] = 0.0
+        return depth
+
+    def segment(self, data: mujoco.MjData, camera_name: str) -> np.ndarray:
+        """MuJoCo's segmentation of the same view, (H, W, 2) int32: object id and object type per
+        pixel (-1 for background), drawn with the same visible groups as the depth image. Shares
+        this renderer's OpenGL context, which costs far less than creating a second one."""
+        cam_id = self._camera_id(camera_name)
+        self._renderer.disable_depth_rendering()
+        self._renderer.enable_segmentation_rendering()
+        try:
+            self._renderer.update_scene(data, camera=cam_id, scene_option=self._option)
+            return self._renderer.render()
+        finally:
+            self._renderer.disable_segmentation_rendering()
+            self._renderer.enable_depth_rendering()
+
+    def _camera_id(self, camera_name: str) -> int:
+        """The camera's id, checked to exist and to have this renderer's resolution."""
         import mujoco
 
         if self._renderer is None:
-            raise RuntimeError("DepthRenderer.render called after close()")
+            raise RuntimeError("DepthRenderer used after close()")
         cam_id = mujoco.mj_name2id(self._model, mujoco.mjtObj.mjOBJ_CAMERA, camera_name)
         if cam_id < 0:
             raise ValueError(f"model has no camera named '{camera_name}'")
@@ -527,10 +549,7 @@ class DepthRenderer:
                 f"camera '{camera_name}' has resolution {resolution}, this renderer renders {expected} "
                 f"(camera '{self.intrinsics.name}'); add the camera with add_camera and these intrinsics"
             )
-        self._renderer.update_scene(data, camera=cam_id, scene_option=self._option)
-        depth = self._renderer.render()
-        depth[depth >= self._background] = 0.0
-        return depth
+        return cam_id
 
     def close(self) -> None:
         """Free the OpenGL context (idempotent)."""

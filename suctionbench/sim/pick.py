@@ -239,30 +239,23 @@ class PickRunner:
         }
 
     def observe(self) -> Any:
-        """The policy's view: the overhead depth image (with sensor noise) and the camera."""
+        """The policy's view: the overhead depth image (with sensor noise), the camera, and the
+        object's pixels (MuJoCo segmentation of the same view, from the same OpenGL context)."""
         from suctionbench.policies.base import Observation
         from suctionbench.sensing.camera import DepthRenderer
         from suctionbench.sensing.noise import apply_axial_noise
 
         with DepthRenderer(self.scene.model, self.intrinsics) as renderer:
             depth = renderer.render(self.episode.data, self.scene.camera)
+            mask = self.object_pixels(renderer.segment(self.episode.data, self.scene.camera))
         if self.request.observation_noise:
             depth = apply_axial_noise(depth, np.random.default_rng((self.request.seed, 2)))
-        return Observation(depth=depth, intrinsics=self.intrinsics, camera_pose=self.camera_pose,
-                           mask=self.object_mask())
+        return Observation(depth=depth, intrinsics=self.intrinsics, camera_pose=self.camera_pose, mask=mask)
 
-    def object_mask(self) -> np.ndarray:
-        """Pixels of the object in the overhead camera (MuJoCo segmentation rendering)."""
-        model = self.scene.model
-        renderer = mujoco.Renderer(model, self.intrinsics.height, self.intrinsics.width)
-        try:
-            renderer.enable_segmentation_rendering()
-            renderer.update_scene(self.episode.data, self.scene.camera)
-            seg = renderer.render()
-        finally:
-            renderer.close()
-        geoms = np.flatnonzero(model.geom_bodyid == self.episode.object)
-        return (seg[..., 1] == mujoco.mjtObj.mjOBJ_GEOM) & np.isin(seg[..., 0], geoms)
+    def object_pixels(self, segmentation: np.ndarray) -> np.ndarray:
+        """Pixels (H, W) bool where a segmentation image (DepthRenderer.segment) shows the object."""
+        geoms = np.flatnonzero(self.scene.model.geom_bodyid == self.episode.object)
+        return (segmentation[..., 1] == mujoco.mjtObj.mjOBJ_GEOM) & np.isin(segmentation[..., 0], geoms)
 
     def _plan_from_image(self) -> Any:
         """Run an image policy from the registry on the current observation (world-frame result)."""

@@ -21,7 +21,7 @@ from suctionbench.config import cup_preset
 from suctionbench.errors import InputError
 from suctionbench.objects.registry import list_objects
 from suctionbench.sensing.camera import resolve_camera
-from suctionbench.sim.pick import PickRequest, PickRunner
+from suctionbench.sim.pick import NO_LABELS, PickRequest, PickRunner
 
 ACTION_LOW = np.array([-1.0, -1.0, 0.0, -1.0, -1.0, -1.0], dtype=np.float32)
 """Lower action bounds: grasp point x, y, z (m, camera frame), approach vx, vy, vz. The camera
@@ -255,9 +255,8 @@ class SuctionPickEnv(gymnasium.Env):
         if not (np.all(np.isfinite(action)) and norm >= MIN_APPROACH_NORM):
             self.last_wall_time = None
             info.update(
-                success=False, valid=True, failure="invalid_action", detail=None, label_seal=None, label_wr=None,
-                label_rwr=None, label_scores=None, grasp_world=None, seal_time=None, sim_time=0.0, peak_slip=0.0,
-                lifted=False, in_bin=False, phases={},
+                success=False, valid=True, failure="invalid_action", detail=None, **NO_LABELS, grasp_world=None,
+                seal_time=None, sim_time=0.0, peak_slip=0.0, lifted=False, in_bin=False, phases={},
             )
         else:
             rotation, origin = runner.camera_pose[:3, :3], runner.camera_pose[:3, 3]

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from suctionbench.errors import InputError
-from suctionbench.evaluation.runner import summarize_run
+from suctionbench.evaluation.runner import run_records, summarize_run
 from suctionbench.io import atomic_path
 
 PAPER_RESULTS = {  # FACTS.md section 5: success rate (AP) in %, Basic / Typical / Adversarial
@@ -62,12 +62,6 @@ def expand_run_dirs(paths: list[Path]) -> list[Path]:
             raise InputError(f"run '{path}': no run.json in it or below it (not a suctionbench eval run)")
         runs += found
     return runs
-
-
-def _records(run_dir: Path) -> list[dict[str, Any]]:
-    from suctionbench.runlog.reader import read_run
-
-    return [e["result"] | {"_path": e["path"]} for e in read_run(run_dir / "trials") if e.get("result")]
 
 
 def success_attempt_curve(q: np.ndarray, success: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -155,15 +149,15 @@ def build_report(run_dirs: list[Path], out: Path) -> dict[str, Any]:
     from suctionbench.learning.metrics import precision_recall_curve
 
     run_dirs = expand_run_dirs(run_dirs)
-    summaries = [summarize_run(run_dir) for run_dir in run_dirs]
+    all_records = [run_records(run_dir) for run_dir in run_dirs]  # each log is read once
+    summaries = [summarize_run(run_dir, records) for run_dir, records in zip(run_dirs, all_records, strict=True)]
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputError(f"output '{out}': cannot create it ({exc.strerror})") from None
     galleries, per_object = [], {}
     curves: dict[str, list[tuple[str, np.ndarray, np.ndarray]]] = {}  # figure group -> (label, q, success)
-    for run_dir, summary in zip(run_dirs, summaries, strict=True):
-        records = _records(run_dir)
+    for run_dir, summary, records in zip(run_dirs, summaries, all_records, strict=True):
         valid = [r for r in records if r.get("valid")]
         known = summary["policy"] == "analytic"
         label = f"{summary['policy']}-{summary['metric']}" if known else summary["policy"]
@@ -210,7 +204,7 @@ def _gallery(run_dir: Path, failed: list[dict[str, Any]], out: Path, label: str)
 
     items = []
     for r in [r for r in failed if r.get("grasp_world")][:GALLERY_PER_RUN]:  # failures that executed a grasp
-        path = Path(r["_path"])
+        path = Path(r["log"])
         depth_msgs = list(iter_messages(path, "/camera/depth"))
         calib = list(iter_messages(path, "/camera/calibration"))
         if not depth_msgs or not calib:

@@ -110,16 +110,24 @@ def _check_model(model: str | None) -> None:
     load_model(model or asset_path("models", "gqcnn-compact"))
 
 
-def summarize_run(run_dir: Path) -> dict[str, Any]:
-    """Results table of a run directory, computed from its MCAP logs."""
+def run_records(run_dir: Path) -> list[dict[str, Any]]:
+    """The result record of every trial log of a run, each with its log's path under "log"."""
     from suctionbench.runlog.reader import read_run
 
+    return [episode["result"] | {"log": episode["path"]} for episode in read_run(Path(run_dir) / "trials")
+            if episode.get("result")]
+
+
+def summarize_run(run_dir: Path, records: list[dict[str, Any]] | None = None) -> dict[str, Any]:
+    """Results table of a run directory, computed from its MCAP logs (`records`: those logs'
+    `run_records`, when the caller has read them already)."""
     run_dir = Path(run_dir)
     try:
         run = json.loads((run_dir / "run.json").read_text())
     except FileNotFoundError:
         raise InputError(f"run '{run_dir}': no run.json (not a suctionbench eval run)") from None
-    records = [episode["result"] for episode in read_run(run_dir / "trials") if episode.get("result")]
+    if records is None:
+        records = run_records(run_dir)
     return {"policy": run["policy"], "task": run["task"]["name"], "set": run["task"]["set"],
             "metric": run.get("metric"), **trial_metrics(records)}
 

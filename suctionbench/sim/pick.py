@@ -20,10 +20,13 @@ from suctionbench.objects.build import ObjectRecord
 from suctionbench.objects.registry import load_object
 from suctionbench.policies.base import NoGraspError
 from suctionbench.sensing.camera import CameraPoseConfig, resolve_camera, sample_camera_pose
-from suctionbench.sim.episode import EpisodeConfig, PickEpisode
+from suctionbench.sim.episode import EpisodeConfig, EpisodeResult, PickEpisode
 from suctionbench.sim.scene import SceneConfig, build_scene
 
 KNOWN_STATE_POLICIES = ("analytic", "random-surface")
+
+NO_LABELS: dict[str, Any] = dict.fromkeys(("label_seal", "label_wr", "label_rwr", "label_scores"))
+"""The label fields of a record when no grasp was executed (`PickRunner.label_grasp` fills them)."""
 """Policies that see the true object state: rank surface grasps by RWR, or draw one uniformly."""
 
 PLACEMENTS = ("drop", "stable")
@@ -153,9 +156,7 @@ class PickRunner:
         req = self.request
         placement_time = float(self.episode.data.time)
         pose = self.object_pose()
-        mesh = self.mesh.copy()
-        mesh.apply_transform(pose)
-        com = pose[:3, :3] @ np.asarray(self.record.com) + pose[:3, 3]
+        mesh, com = self.posed_object(pose)
         chosen, self.observation = None, None
         self._sensing_time = 0.0
         plan_start = time.perf_counter()
@@ -176,7 +177,11 @@ class PickRunner:
             try:
                 chosen = self._plan_from_image()
             except NoGraspError as exc:  # the policy's failure: recorded, nothing executed
-                return self._no_grasp(str(exc), placement_time, time.perf_counter() - plan_start, log)
+                result = EpisodeResult(success=False, failure="no_grasp", valid=True, seal_time=None,
+                                       peak_slip=0.0, lifted=False, in_bin=False, sim_time=0.0, wall_time=0.0,
+                                       detail=str(exc))
+                plan_time = time.perf_counter() - plan_start - self._sensing_time
+                return self._record(None, None, NO_LABELS, placement_time, plan_time, result, log)
             point, approach = chosen.point, chosen.approach
             q = None if np.isnan(chosen.score) else chosen.score
         plan_time = time.perf_counter() - plan_start - self._sensing_time
@@ -187,48 +192,35 @@ class PickRunner:
             self._log_start(log, point, approach, chosen)
         result = self.episode.execute(point, approach)
         self.episode.recorder = None
-        record = {
-            "object": req.object_key,
-            "seed": req.seed,
-            "placement": req.placement,
-            "grasp_world": [*point.tolist(), *approach.tolist()],
-            "policy_q": q,
-            **labels,
-            "placement_time": placement_time,
-            "sensing_time": self._sensing_time,
-            "plan_time": plan_time,
-            **result.to_dict(),
-        }
-        if log is not None:
-            log.log_result(float(self.episode.data.time), record)
-        return record
+        grasp = [*point.tolist(), *approach.tolist()]
+        return self._record(grasp, q, labels, placement_time, plan_time, result, log)
 
-    def _no_grasp(self, reason: str, placement_time: float, elapsed: float, log: Any) -> dict[str, Any]:
-        """The record of a trial whose image policy found no grasp: a valid, failed pick."""
-        from suctionbench.sim.episode import EpisodeResult
-
+    def _record(self, grasp: list[float] | None, q: float | None, labels: dict[str, Any], placement_time: float,
+                plan_time: float, result: EpisodeResult, log: Any) -> dict[str, Any]:
+        """The JSON-ready record of the trial (grasp None: nothing was executed), logged if `log`."""
         req = self.request
-        result = EpisodeResult(success=False, failure="no_grasp", valid=True, seal_time=None, peak_slip=0.0,
-                               lifted=False, in_bin=False, sim_time=0.0, wall_time=0.0, detail=reason)
         record = {
-            "object": req.object_key, "seed": req.seed, "placement": req.placement, "grasp_world": None,
-            "policy_q": None, "label_seal": None, "label_wr": None, "label_rwr": None, "label_scores": None,
-            "placement_time": placement_time, "sensing_time": self._sensing_time,
-            "plan_time": elapsed - self._sensing_time, **result.to_dict(),
+            "object": req.object_key, "seed": req.seed, "placement": req.placement, "grasp_world": grasp,
+            "policy_q": q, **labels, "placement_time": placement_time, "sensing_time": self._sensing_time,
+            "plan_time": plan_time, **result.to_dict(),
         }
         if log is not None:
             log.log_result(float(self.episode.data.time), record)
         return record
+
+    def posed_object(self, pose: np.ndarray | None = None) -> tuple[Any, np.ndarray]:
+        """The object's mesh and centre of mass in the world, at `pose` (default: its current one)."""
+        pose = self.object_pose() if pose is None else pose
+        mesh = self.mesh.copy()
+        mesh.apply_transform(pose)
+        return mesh, pose[:3, :3] @ np.asarray(self.record.com) + pose[:3, 3]
 
     def label_grasp(self, point: np.ndarray, approach: np.ndarray, mesh: Any = None,
                     com: np.ndarray | None = None) -> dict[str, Any]:
         """Analytic labels of one grasp on the object in its true current pose: seal, nominal wrench
         resistance, robust label, and every 3D metric's score (the known-objects tables rank by them)."""
         if mesh is None:
-            pose = self.object_pose()
-            mesh = self.mesh.copy()
-            mesh.apply_transform(pose)
-            com = pose[:3, :3] @ np.asarray(self.record.com) + pose[:3, 3]
+            mesh, com = self.posed_object()
         labeller = SuctionLabeller(mesh, LabelConfig(cup=self.request.cup), mass=self.record.mass, com=com)
         labels = labeller.label(point[None], approach[None], self.request.seed, metrics=tuple(METRICS))
         return {

@@ -102,8 +102,6 @@ class SimCupConfig:
 class CupHandles:
     """Names of the cup's MuJoCo elements."""
 
-    lip_body: str
-    bellow_body: str
     tip_site: str
     actuator: str
     slide_joint: str
@@ -176,7 +174,7 @@ def add_suction_tool(
         dyntype=mujoco.mjtDyn.mjDYN_FILTEREXACT, dynprm=[sim.vacuum_time_constant] + [0] * 9,
     )
     return CupHandles(
-        lip_body=f"{prefix}_lip", bellow_body=f"{prefix}_bellow", tip_site=f"{prefix}_tip",
+        tip_site=f"{prefix}_tip",
         actuator=f"{prefix}_vacuum", slide_joint=f"{prefix}_compress", lip_geoms=tuple(names),
     )
 
@@ -186,9 +184,11 @@ class SuctionController:
 
     def __init__(self, model: mujoco.MjModel, handles: CupHandles, sim: SimCupConfig = SimCupConfig()):
         self.model = model
-        self.handles = handles
         self.sim = sim
         self.lip_geoms = np.array([model.geom(n).id for n in handles.lip_geoms])
+        self._lip_slot = np.full(model.ngeom, -1)
+        """Per geom: its index among the lip spheres, -1 for any other geom."""
+        self._lip_slot[self.lip_geoms] = np.arange(len(self.lip_geoms))
         self.actuator = model.actuator(handles.actuator).id
         self.slide_qpos = model.jnt_qposadr[model.joint(handles.slide_joint).id]
         self.commanded = False
@@ -197,15 +197,18 @@ class SuctionController:
     def sealed_body(self, data: mujoco.MjData, gap: float | None = None) -> int:
         """Id of the body that every lip sphere touches within `gap` (default seal_gap), else -1."""
         gap = self.sim.seal_gap if gap is None else gap
-        touching: list[set[int]] = [set() for _ in self.lip_geoms]
-        index = {g: i for i, g in enumerate(self.lip_geoms)}
-        for c in data.contact[: data.ncon]:
-            for mine, other in ((c.geom1, c.geom2), (c.geom2, c.geom1)):
-                if mine in index and c.dist <= gap:
-                    touching[index[mine]].add(int(self.model.geom_bodyid[other]))
-        common = set.intersection(*touching) if touching else set()
-        common.discard(0)  # the world body (table, bin walls): not an object we can lift
-        return min(common) if common else -1
+        n = data.ncon
+        if n == 0 or not len(self.lip_geoms):
+            return -1
+        geoms, near = data.contact.geom[:n], data.contact.dist[:n] <= gap
+        touching = np.zeros((len(self.lip_geoms), self.model.nbody), dtype=bool)  # lip sphere x body
+        for mine, other in ((0, 1), (1, 0)):
+            slot = self._lip_slot[geoms[:, mine]]
+            hit = near & (slot >= 0)
+            touching[slot[hit], self.model.geom_bodyid[geoms[hit, other]]] = True
+        common = touching.all(axis=0)
+        common[0] = False  # the world body (table, bin walls): not an object we can lift
+        return int(np.argmax(common)) if common.any() else -1
 
     def compression(self, data: mujoco.MjData) -> float:
         """How far (m) the bellow is compressed."""

@@ -153,7 +153,7 @@ class PickEpisode:
         self.data_ik.qpos[:] = scene.home_qpos
         self._ready: np.ndarray | None = None
         self.tip = self.model.site(scene.cup.tip_site).id
-        self.robot_geoms = self._robot_geoms()
+        self._is_robot = self._robot_geoms()
         self.trajectory: list[np.ndarray] = []
         self.watch_collisions = False
         self.recorder = None
@@ -162,9 +162,9 @@ class PickEpisode:
 
     # -- set-up ---------------------------------------------------------------------------------
     def _robot_geoms(self) -> np.ndarray:
-        """Geoms of the arm links (not the cup), for collision checks."""
+        """Per geom (ngeom,) bool: whether it belongs to the arm links (not the cup), for collision checks."""
         names = [mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_GEOM, g) or "" for g in range(self.model.ngeom)]
-        return np.array([g for g, n in enumerate(names) if n.startswith("yumi_")])
+        return np.array([n.startswith("yumi_") for n in names], dtype=bool)
 
     def reset(self, rng: np.random.Generator, *, stable_pose: np.ndarray | None = None) -> None:
         """Home the arm and place the object: dropped from a random orientation (default, the
@@ -249,8 +249,8 @@ class PickEpisode:
         s = np.linspace(0.0, 1.0, steps + 1)[1:]
         s = 10 * s**3 - 15 * s**4 + 6 * s**5
         grid = np.linspace(0.0, 1.0, len(waypoints))
-        for u in s:
-            q = np.array([np.interp(u, grid, waypoints[:, j]) for j in range(waypoints.shape[1])])
+        targets = np.stack([np.interp(s, grid, waypoints[:, j]) for j in range(waypoints.shape[1])], axis=1)
+        for q in targets:
             sealed = self._step(q)
             if watch is not None and watch(sealed):
                 return
@@ -385,10 +385,12 @@ class PickEpisode:
 
     def _check_robot_collision(self) -> None:
         """Arm links touching the table, the bin or the object end the episode."""
-        d = self.data
-        for con in d.contact[: d.ncon]:
-            if con.dist < 0 and (con.geom1 in self.robot_geoms or con.geom2 in self.robot_geoms):
-                raise _Failure("collision")
+        d, n = self.data, self.data.ncon
+        if n == 0:
+            return
+        geoms = d.contact.geom[:n]
+        if np.any((d.contact.dist[:n] < 0) & (self._is_robot[geoms[:, 0]] | self._is_robot[geoms[:, 1]])):
+            raise _Failure("collision")
 
 
 def _random_quat(rng: np.random.Generator) -> np.ndarray:

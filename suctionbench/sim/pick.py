@@ -24,10 +24,10 @@ from suctionbench.sim.episode import EpisodeConfig, EpisodeResult, PickEpisode
 from suctionbench.sim.scene import SceneConfig, build_scene
 
 KNOWN_STATE_POLICIES = ("analytic", "random-surface")
+"""Policies that see the true object state: rank surface grasps by RWR, or draw one uniformly."""
 
 NO_LABELS: dict[str, Any] = dict.fromkeys(("label_seal", "label_wr", "label_rwr", "label_scores"))
 """The label fields of a record when no grasp was executed (`PickRunner.label_grasp` fills them)."""
-"""Policies that see the true object state: rank surface grasps by RWR, or draw one uniformly."""
 
 PLACEMENTS = ("drop", "stable")
 """How the object is placed: dropped from a random orientation, or in its most probable stable pose."""
@@ -111,10 +111,7 @@ class PickRunner:
     def object_pose(self) -> np.ndarray:
         """Current world transform of the object (its mesh frame)."""
         d, body = self.episode.data, self.episode.object
-        pose = np.eye(4)
-        pose[:3, :3] = d.xmat[body].reshape(3, 3)
-        pose[:3, 3] = d.xpos[body]
-        return pose
+        return _pose(d.xpos[body], d.xmat[body])
 
     def run(self, render: Path | None = None, log: Path | None = None) -> dict[str, Any]:
         """Place, choose, execute; returns a JSON-ready record of the episode. With `log`, the
@@ -130,14 +127,12 @@ class PickRunner:
 
     def log_metadata(self) -> dict[str, Any]:
         """Run configuration, versions and seed, for the run log's metadata record."""
-        import mujoco as mj
-
         from suctionbench import __version__
         from suctionbench.config import to_dict
 
         req = self.request
         return {
-            "suctionbench_version": __version__, "mujoco_version": mj.__version__, "object": req.object_key,
+            "suctionbench_version": __version__, "mujoco_version": mujoco.__version__, "object": req.object_key,
             "seed": req.seed, "policy": req.policy if req.grasp is None else "given", "placement": req.placement,
             "cup": to_dict(req.cup), "camera": to_dict(self.intrinsics), "episode": to_dict(req.episode),
         }

@@ -14,13 +14,10 @@ from suctionbench.objects.build import ObjectRecord
 from suctionbench.objects.mjcf import add_object_body
 from suctionbench.sensing.camera import CameraIntrinsics, add_camera
 from suctionbench.sim.cup import ENV_CONAFFINITY, ENV_CONTYPE, CupHandles, SimCupConfig, add_suction_tool
-from suctionbench.sim.yumi import load_yumi_spec
+from suctionbench.sim.yumi import RIGHT_FLANGE_SITE, load_yumi_spec
 
 FLANGE_BODY = "yumi_link_7_r"
 """Body carrying the right flange site; the tool is attached there at the site's pose."""
-
-FLANGE_SITE = "yumi_flange_r"
-"""The right arm's tool flange (FACTS section 6)."""
 
 
 @dataclass(frozen=True)
@@ -103,7 +100,7 @@ def build_scene(
     )
     _add_bin(world, config, env)
     add_object_body(spec, record, name="object", pos=(config.workspace_centre[0], config.workspace_centre[1], 0.3))
-    flange = spec.site(FLANGE_SITE)
+    flange = spec.site(RIGHT_FLANGE_SITE)
     handles = add_suction_tool(
         spec.body(FLANGE_BODY), spec, cup, sim_cup, prefix="cup", pos=list(flange.pos), quat=list(flange.quat)
     )

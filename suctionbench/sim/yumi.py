@@ -29,8 +29,6 @@ LEFT_ARM_JOINTS = tuple(f"yumi_joint_{k}_l" for k in CHAIN_JOINT_NUMBERS)
 RIGHT_FLANGE_SITE = "yumi_flange_r"
 """Site at the right tool flange (z axis out of the flange): where the suction tool mounts."""
 
-LEFT_FLANGE_SITE = "yumi_flange_l"
-"""Site at the left tool flange."""
 
 
 def _read_only(values) -> np.ndarray:

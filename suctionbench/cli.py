@@ -354,8 +354,6 @@ def generate(
         from suctionbench.dataset.generate import GenerationConfig, generate_dataset
         from suctionbench.objects.registry import resolve_objects
 
-        if engine not in ("local", "ray"):
-            raise InputError(f"--engine '{engine}': expected local or ray")
         if grasps_per_object < 1:
             raise InputError(f"--grasps-per-object {grasps_per_object}: must be at least 1")
         records = resolve_objects(objects)
@@ -441,13 +439,11 @@ def eval_cmd(
     """Run the benchmark: seeded trials in simulation, one MCAP log each, and the paper-style table."""
 
     def body() -> dict[str, Any]:
-        from suctionbench.config import cup_preset
         from suctionbench.evaluation.runner import run_eval
         from suctionbench.evaluation.tasks import Task, load_task
 
         if (set_name is None) == (task is None):
             raise InputError("give exactly one of --set S or --task T")
-        cup_preset(cup)
         the_task = load_task(task) if task else Task(name=set_name, set=set_name, trials=trials or 25)
         runs = {}
         if metric is not None:

@@ -13,13 +13,18 @@ ENGINES = ("local", "ray")
 """Available execution engines."""
 
 
+def check_engine(engine: str) -> None:
+    """InputError for an unknown engine; callers check before they write any output."""
+    if engine not in ENGINES:
+        raise InputError(f"--engine '{engine}': expected {' or '.join(ENGINES)}")
+
+
 def map_ordered(
     fn: Callable[..., Any], args: Sequence[tuple], *, engine: str = "local", workers: int = 1,
     address: str | None = None,
 ) -> Iterator[Any]:
     """Yield fn(*a) for every a in args, in order, computed by `engine`."""
-    if engine not in ENGINES:
-        raise InputError(f"--engine '{engine}': expected local or ray")
+    check_engine(engine)
     if not args:
         return
     if engine == "local":

@@ -151,6 +151,7 @@ def test_bad_inputs(tmp_path):
     with pytest.raises(InputError, match="engine"):
         record = load_object(KEYS[0])
         gen.generate_dataset(tmp_path / "z", [str(record.directory)], KEYS[:1], "primesense", CONFIG, engine="spark")
+    assert not (tmp_path / "z").exists()  # checked before anything is written
 
 
 def test_smoothed_approaches_blend_faces_at_edges_like_a_depth_normal():

@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 import json
+from collections import Counter
 
 import pytest
 from typer.testing import CliRunner
 
 from suctionbench.cli import app
-from suctionbench.evaluation.runner import plan_trials, summarize_run
+from suctionbench.evaluation.runner import plan_trials
 from suctionbench.evaluation.tasks import load_task
 from suctionbench.runlog.reader import read_run
+from suctionbench.sim.episode import FAILURES
 
 POLICIES = ["random", "centroid", "planarity", "planarity-centroid", "gqcnn", "analytic", "random-surface"]
 
@@ -31,10 +33,10 @@ def test_smoke_eval_end_to_end_from_the_logs(tmp_path):
         for topic in ("/camera/depth", "/grasps/candidates", "/tf", "/suction", "/result"):
             assert log["topics"].get(topic, 0) >= 1, topic
         assert log["metadata"]["policy"] == "gqcnn"
-    again = summarize_run(tmp_path / "run")  # the table is rebuilt from the logs
-    assert {k: again[k] for k in ("success_rate", "ap", "outcomes")} == {
-        k: summary[k] for k in ("success_rate", "ap", "outcomes")
-    }
+    # the table is the logs' results: counted here straight from the re-read result records
+    results = [log["result"] for log in logs]
+    assert summary["success_rate"] == pytest.approx(sum(r["success"] for r in results) / len(results), abs=1e-4)
+    assert summary["outcomes"] == dict(Counter(r["failure"] or "success" for r in results))
 
 
 def test_trials_are_identical_across_policies():
@@ -51,8 +53,7 @@ def test_one_real_pick_per_policy(policy):
 
     result = PickRunner(PickRequest("basic/box_tea", policy=policy, seed=3)).run()
     assert result["valid"], result
-    assert result["failure"] in (None, "no_seal", "seal_lost_lift", "seal_lost_transport", "seal_lost_hold",
-                                 "not_lifted", "collision", "unreachable")
+    assert result["failure"] is None or result["failure"] in FAILURES
 
 
 @pytest.mark.parametrize(
@@ -63,12 +64,16 @@ def test_one_real_pick_per_policy(policy):
         (["--policy", "centroid", "--task", "no_such_task"], "no_such_task"),
         (["--policy", "gqcnn", "--set", "basic", "--model", "/no/such/model"], "model"),
         (["--policy", "centroid"], "--set"),
+        (["--policy", "centroid", "--set", "basic", "--engine", "spark"], "spark"),
+        (["--policy", "centroid", "--set", "basic", "--cup", "huge"], "huge"),
+        (["--policy", "analytic", "--set", "basic", "--metric", "nope"], "nope"),
     ],
 )
 def test_eval_bad_input_exits_2(tmp_path, args, needle):
     result = CliRunner().invoke(app, ["eval", *args, "--trials", "1", "--out", str(tmp_path / "r"), "--json"])
     assert result.exit_code == 2, result.output
     assert needle in last_json(result)["error"]
+    assert not (tmp_path / "r").exists()  # nothing half-written
 
 
 def test_eval_unwritable_output_exits_2():
@@ -76,10 +81,6 @@ def test_eval_unwritable_output_exits_2():
                                       "--out", "/proc/no/such/dir", "--json"])
     assert result.exit_code == 2 and "cannot create" in last_json(result)["error"]
 
-
-def test_report_bad_input(tmp_path):
-    result = CliRunner().invoke(app, ["report", str(tmp_path / "nope"), "--out", str(tmp_path / "r"), "--json"])
-    assert result.exit_code == 2
 
 
 def test_a_policy_that_finds_no_grasp_fails_the_trial_without_executing(tmp_path, monkeypatch):

@@ -249,8 +249,10 @@ def generate_dataset(
     """
     from suctionbench import __version__
     from suctionbench.dataset.storage import DatasetReader, DatasetWriter, read_card, write_card, write_splits
+    from suctionbench.parallel import check_engine
     from suctionbench.sensing.camera import resolve_camera
 
+    check_engine(engine)
     if config.datapoints < 1:
         raise InputError(f"--datapoints {config.datapoints}: must be at least 1")
     out = Path(out)

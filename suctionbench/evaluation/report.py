@@ -205,12 +205,12 @@ def _gallery(run_dir: Path, failed: list[dict[str, Any]], out: Path, label: str)
     items = []
     for r in [r for r in failed if r.get("grasp_world")][:GALLERY_PER_RUN]:  # failures that executed a grasp
         path = Path(r["log"])
-        depth_msgs = list(iter_messages(path, "/camera/depth"))
-        calib = list(iter_messages(path, "/camera/calibration"))
-        if not depth_msgs or not calib:
+        depth_msg = next(iter_messages(path, "/camera/depth"), None)  # the first frame: what the policy saw
+        calib = next(iter_messages(path, "/camera/calibration"), None)
+        if depth_msg is None or calib is None:
             continue
-        depth = depth_image(depth_msgs[0][1])
-        k = np.asarray(calib[0][1]["K"], dtype=float).reshape(3, 3)
+        depth = depth_image(depth_msg[1])
+        k = np.asarray(calib[1]["K"], dtype=float).reshape(3, 3)
         meta_pose = _camera_pose(path)
         point = np.asarray(r["grasp_world"][:3])
         p_cam = (point - meta_pose[:3, 3]) @ meta_pose[:3, :3]

@@ -79,10 +79,14 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
         policy_factory(policy)  # unknown policy -> InputError before any work
     if policy == "gqcnn":
         _check_model(model)
+    from suctionbench.config import cup_preset
     from suctionbench.contact.metrics import METRICS
+    from suctionbench.parallel import check_engine
 
     if metric not in METRICS:
         raise InputError(f"--metric '{metric}' is unknown (known: {', '.join(METRICS)})")
+    cup_preset(cup)  # unknown preset -> InputError
+    check_engine(engine)
     planned = plan_trials(task, policy, model=model, trials=trials, seed=seed, metric=metric, cup=cup)
     out = Path(out)
     log_dir = out / "trials"

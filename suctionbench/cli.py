@@ -390,6 +390,7 @@ def dataset_show(
 
     def body() -> dict[str, Any]:
         from suctionbench.dataset.storage import DatasetReader, read_card
+        from suctionbench.learning.data import label_threshold
 
         card = read_card(directory)
         reader = DatasetReader(directory)
@@ -397,7 +398,7 @@ def dataset_show(
             "datapoints": reader.num_datapoints, "shards": reader.num_shards,
             "positive_rate": card.get("positive_rate"), "camera": card.get("camera", {}).get("name"),
             "objects": len(card.get("objects", [])), "status": card.get("status"),
-            "threshold": card.get("config", {}).get("label_threshold"),
+            "threshold": label_threshold(card),
         }
         if thumbnails is not None:
             from suctionbench.sensing.image import save_png

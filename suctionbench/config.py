@@ -9,25 +9,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any, ClassVar, TypeVar
+from typing import Any
 
 from suctionbench.errors import InputError
-
-T = TypeVar("T")
 
 
 @dataclass(frozen=True)
 class CupConfig:
     """A single circular suction cup, as modelled in Dex-Net 3.0 (section "Compliant Suction Contact Model")."""
-
-    DEFAULT: ClassVar[CupConfig]
-    """Preset: physically grounded (V = vacuum pressure x area, kappa from the lip staying in contact)."""
-
-    PAPER: ClassVar[CupConfig]
-    """Preset: the paper's literal V = 250 and kappa = 0.005."""
 
     name: str = "default"
     """Preset name, recorded in labels, datasets and model cards."""
@@ -82,11 +72,6 @@ class CupConfig:
         """Largest mass the vacuum alone can hold against gravity (V / g)."""
         return self.vacuum_force / STANDARD_GRAVITY
 
-    @property
-    def area(self) -> float:
-        """Area pi r^2 enclosed by the lip."""
-        return math.pi * self.radius**2
-
 
 STANDARD_GRAVITY = 9.80665
 """Standard gravity in m/s^2."""
@@ -97,7 +82,6 @@ CUP_DEFAULT = CupConfig()
 CUP_PAPER = CupConfig(name="paper", vacuum_force=250.0, kappa=0.005)
 """The paper's literal values, V = 250 N and kappa = 0.005 (units as the paper states them)."""
 
-CupConfig.DEFAULT, CupConfig.PAPER = CUP_DEFAULT, CUP_PAPER
 
 CUP_PRESETS: dict[str, CupConfig] = {"default": CUP_DEFAULT, "paper": CUP_PAPER}
 
@@ -224,33 +208,3 @@ def to_dict(config: Any) -> dict[str, Any]:
         value = getattr(config, f.name)
         out[f.name] = to_dict(value) if dataclasses.is_dataclass(value) else plain(value)
     return out
-
-
-def from_dict(cls: type[T], data: dict[str, Any], *, source: str = "config") -> T:
-    """Build config dataclass `cls` from a nested dict, rejecting unknown keys by name."""
-    names = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
-    unknown = sorted(set(data) - set(names))
-    if unknown:
-        raise InputError(f"{source}: unknown key(s) {', '.join(unknown)} for {cls.__name__}")
-    kwargs: dict[str, Any] = {}
-    for key, value in data.items():
-        default = getattr(cls(), key)  # type: ignore[call-arg]
-        if dataclasses.is_dataclass(default):
-            kwargs[key] = from_dict(type(default), value, source=f"{source}.{key}")
-        elif isinstance(default, tuple):
-            kwargs[key] = tuple(value)
-        else:
-            kwargs[key] = value
-    return cls(**kwargs)
-
-
-def load_toml(cls: type[T], path: str | Path) -> T:
-    """Load config dataclass `cls` from a TOML file, with errors that name the file."""
-    path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise InputError(f"config '{path}': file not found") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"config '{path}': not valid TOML ({exc})") from None
-    return from_dict(cls, data, source=str(path))

@@ -55,7 +55,7 @@ from typing import Any
 import numpy as np
 
 from suctionbench.errors import InputError
-from suctionbench.io import atomic_path
+from suctionbench.io import atomic_path, file_digest
 
 
 @dataclass(frozen=True)
@@ -121,7 +121,6 @@ MANIFEST_FORMAT = "suctionbench-shard-1"
 
 _NPZ_ENTRY = NPZ_KEY + ".npy"
 _ZIP_EPOCH = (1980, 1, 1, 0, 0, 0)
-_HASH_CHUNK = 1 << 20
 _MANIFEST_RE = re.compile(r"^shard_(\d{5})\.json$")
 _DATA_RE = re.compile(r"^(" + "|".join(FIELDS) + r")_(\d{5})\.npz$")
 
@@ -171,17 +170,6 @@ def _json_bytes(obj: Any, what: str) -> bytes:
 def _write_bytes(path: Path, data: bytes) -> None:
     with atomic_path(path) as tmp:
         tmp.write_bytes(data)
-
-
-def _file_digest(path: Path) -> tuple[str, int]:
-    """sha256 hex digest and size of a file, read in chunks (never the whole file in memory)."""
-    h = hashlib.sha256()
-    size = 0
-    with open(path, "rb") as fh:
-        while chunk := fh.read(_HASH_CHUNK):
-            h.update(chunk)
-            size += len(chunk)
-    return h.hexdigest(), size
 
 
 def _read_file(path: Path, what: str, missing: str) -> bytes:
@@ -575,7 +563,7 @@ class DatasetReader:
             for file_name, expected in sorted(manifest["files"].items()):
                 path = self.tensor_dir / file_name
                 try:
-                    digest, size = _file_digest(path)
+                    digest, size = file_digest(path)
                 except FileNotFoundError:
                     problems.append(_Problem(index, f"{prefix}: file '{path}' missing"))
                     continue

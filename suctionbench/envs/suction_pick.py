@@ -21,6 +21,7 @@ from suctionbench.config import cup_preset
 from suctionbench.errors import InputError
 from suctionbench.objects.registry import list_objects
 from suctionbench.sensing.camera import resolve_camera
+from suctionbench.sim.episode import EpisodeResult
 from suctionbench.sim.pick import NO_LABELS, PickRequest, PickRunner
 
 ACTION_LOW = np.array([-1.0, -1.0, 0.0, -1.0, -1.0, -1.0], dtype=np.float32)
@@ -254,10 +255,9 @@ class SuctionPickEnv(gymnasium.Env):
         broken = False  # the scene can no longer be simulated or rendered
         if not (np.all(np.isfinite(action)) and norm >= MIN_APPROACH_NORM):
             self.last_wall_time = None
-            info.update(
-                success=False, valid=True, failure="invalid_action", detail=None, **NO_LABELS, grasp_world=None,
-                seal_time=None, sim_time=0.0, peak_slip=0.0, lifted=False, in_bin=False, phases={},
-            )
+            outcome = EpisodeResult.not_executed("invalid_action").to_dict()
+            del outcome["wall_time"]  # nothing ran; kept out of info as for executed attempts
+            info.update(outcome, **NO_LABELS, grasp_world=None)
         else:
             rotation, origin = runner.camera_pose[:3, :3], runner.camera_pose[:3, 3]
             point = rotation @ action[:3] + origin
@@ -295,13 +295,7 @@ class SuctionPickEnv(gymnasium.Env):
             return None
         if self._runner is None:
             raise ResetNeeded("call reset() before render()")
-        scene = self._runner.scene
-        renderer = mujoco.Renderer(scene.model, self.intrinsics.height, self.intrinsics.width)
-        try:
-            renderer.update_scene(self._runner.episode.data, scene.camera)
-            return renderer.render().copy()
-        finally:
-            renderer.close()
+        return self._runner.render_rgb()
 
     def close(self) -> None:
         """Drop the cached scenes (idempotent); the environment can be reset again afterwards."""

@@ -18,7 +18,6 @@ second, so a card never names weights that are not there yet.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import platform
@@ -29,7 +28,7 @@ import numpy as np
 import torch
 
 from suctionbench.errors import InputError
-from suctionbench.io import atomic_path
+from suctionbench.io import atomic_path, file_digest
 from suctionbench.learning.data import NormStats
 from suctionbench.learning.models import IMAGE_SIZE, build_model
 
@@ -106,14 +105,6 @@ class GQCNNModel:
         return out
 
 
-def _sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        while chunk := fh.read(1 << 20):
-            h.update(chunk)
-    return h.hexdigest()
-
-
 def save_model(directory: str | Path, model: GQCNNModel) -> Path:
     """Write ``model.safetensors`` then ``model.json`` into `directory`; returns the card path.
 
@@ -128,7 +119,7 @@ def save_model(directory: str | Path, model: GQCNNModel) -> Path:
         save_file(tensors, str(tmp), metadata={"format": CARD_FORMAT, "arch": model.arch})
     card = dict(model.card)
     card.update(format=CARD_FORMAT, normalisation=model.stats.to_dict(), weights=WEIGHTS_NAME,
-                weights_sha256=_sha256(weights))
+                weights_sha256=file_digest(weights)[0])
     text = json.dumps(json_safe(card), indent=2, allow_nan=False) + "\n"
     path = directory / CARD_NAME
     with atomic_path(path) as tmp:
@@ -164,7 +155,7 @@ def load_model(directory: str | Path, device: str = "cpu") -> GQCNNModel:
     weights = Path(directory) / WEIGHTS_NAME
     if not weights.is_file():
         raise InputError(f"model weights '{weights}': missing")
-    if _sha256(weights) != card.get("weights_sha256"):
+    if file_digest(weights)[0] != card.get("weights_sha256"):
         raise InputError(f"model weights '{weights}': sha256 does not match the card (corrupt or from another run)")
     stats = NormStats.from_dict(card.get("normalisation"), source=f"model card '{Path(directory) / CARD_NAME}'")
     try:

@@ -24,7 +24,7 @@ import trimesh
 
 from suctionbench.config import CUP_DEFAULT
 from suctionbench.errors import InputError
-from suctionbench.geometry.mesh import MeshInfo, validate_mesh
+from suctionbench.geometry.mesh import UNIT_SCALES, validate_mesh
 from suctionbench.objects.spec import ObjectSpec
 
 MAX_FACES = 6000
@@ -124,7 +124,7 @@ def geometry_hash(mesh: trimesh.Trimesh) -> str:
     return digest.hexdigest()[:32]
 
 
-def prepare_mesh(mesh: trimesh.Trimesh, source: str) -> MeshInfo:
+def prepare_mesh(mesh: trimesh.Trimesh, source: str) -> trimesh.Trimesh:
     """Validate, decimate if large, and insist on one closed body (what simulation needs)."""
     info = validate_mesh(mesh, source=source)
     mesh = info.mesh
@@ -137,7 +137,7 @@ def prepare_mesh(mesh: trimesh.Trimesh, source: str) -> MeshInfo:
         reduced = mesh.simplify_quadric_decimation(face_count=MAX_FACES)
         if reduced.is_watertight and reduced.is_winding_consistent and reduced.volume > 0:
             mesh = reduced
-    return MeshInfo(mesh=mesh, source=source, watertight=True, warnings=info.warnings)
+    return mesh
 
 
 def stable_poses(mesh: trimesh.Trimesh, com: np.ndarray) -> list[dict[str, Any]]:
@@ -193,13 +193,11 @@ def build_object(
     *,
     source: str = "generated",
     units: str = "m",
-    scale: float = 1.0,
     mass: float | None = None,
     decompose: bool = True,
 ) -> ObjectRecord:
     """Build an object directory at `out_dir` (replaced atomically) and return its record."""
-    info = prepare_mesh(mesh, source=source if source != "generated" else spec.name)
-    mesh = info.mesh
+    mesh = prepare_mesh(mesh, source=source if source != "generated" else spec.name)
     com = np.asarray(mesh.center_mass, dtype=float)
     if mass is None:
         mass = float(np.clip(spec.density * mesh.volume, MIN_MASS, MASS_CAP))
@@ -215,8 +213,8 @@ def build_object(
         description=spec.description,
         source=source,
         units=units,
-        scale=float(scale),
-        density=round(mass / mesh.volume, 6),
+        scale=UNIT_SCALES[units.lower()],
+        density=round(mesh.density, 6),
         mass=round(mass, 9),
         com=np.round(com, 9).tolist(),
         inertia=np.round(inertia, 12).tolist(),

@@ -54,5 +54,4 @@ def import_mesh(
     if not (mesh.is_watertight and mesh.is_winding_consistent):
         raise InputError(f"mesh '{path}': not watertight and could not be repaired (holes too large?)")
     spec = ObjectSpec(name=name, set=set_name, generator="import", params={}, description=f"imported from {path}")
-    scale = {"m": 1.0, "cm": 0.01, "mm": 0.001}[units.lower()]
-    return build_object(mesh, spec, out_dir, source=str(path), units=units, scale=scale, mass=mass)
+    return build_object(mesh, spec, out_dir, source=str(path), units=units, mass=mass)

@@ -123,6 +123,12 @@ class EpisodeResult:
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
 
+    @classmethod
+    def not_executed(cls, failure: str, detail: str | None = None) -> EpisodeResult:
+        """The outcome of an attempt that never moved the robot (no grasp, invalid action)."""
+        return cls(success=False, failure=failure, valid=True, seal_time=None, peak_slip=0.0, lifted=False,
+                   in_bin=False, sim_time=0.0, wall_time=0.0, detail=detail)
+
 
 class _Unstable(Exception):
     """Raised inside the episode when the simulation state becomes invalid."""

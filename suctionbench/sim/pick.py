@@ -172,9 +172,7 @@ class PickRunner:
             try:
                 chosen = self._plan_from_image()
             except NoGraspError as exc:  # the policy's failure: recorded, nothing executed
-                result = EpisodeResult(success=False, failure="no_grasp", valid=True, seal_time=None,
-                                       peak_slip=0.0, lifted=False, in_bin=False, sim_time=0.0, wall_time=0.0,
-                                       detail=str(exc))
+                result = EpisodeResult.not_executed("no_grasp", str(exc))
                 plan_time = time.perf_counter() - plan_start - self._sensing_time
                 return self._record(None, None, NO_LABELS, placement_time, plan_time, result, log)
             point, approach = chosen.point, chosen.approach
@@ -300,13 +298,17 @@ class PickRunner:
 
         self.episode.recorder = record
 
-    def render_png(self, path: Path) -> None:
-        """Save the overhead camera's colour view of the current state as a PNG."""
-        from suctionbench.sensing.image import save_png
-
+    def render_rgb(self) -> np.ndarray:
+        """The overhead camera's colour view of the current state, (H, W, 3) uint8."""
         renderer = mujoco.Renderer(self.scene.model, self.intrinsics.height, self.intrinsics.width)
         try:
             renderer.update_scene(self.episode.data, self.scene.camera)
-            save_png(path, renderer.render())
+            return renderer.render().copy()
         finally:
             renderer.close()
+
+    def render_png(self, path: Path) -> None:
+        """Save `render_rgb` as a PNG."""
+        from suctionbench.sensing.image import save_png
+
+        save_png(path, self.render_rgb())

@@ -365,7 +365,7 @@ def generate(
         with _progress(datapoints, "generating", not as_json) as advance:
             card = generate_dataset(
                 out, [str(r.directory) for r in records], [r.key for r in records], camera, config,
-                engine=engine, workers=workers or os.cpu_count() or 1, address=address, resume=resume,
+                engine=engine, workers=_workers(workers), address=address, resume=resume,
                 overwrite=overwrite, progress=advance,
             )
         elapsed = time.perf_counter() - start
@@ -458,11 +458,11 @@ def eval_cmd(
             count = trials or the_task.trials
             with _progress(count, f"{policy} {m if len(metrics) > 1 else ''}".strip(), not as_json) as advance:
                 runs[m] = run_eval(the_task, policy, run_dir, model=model, trials=trials, seed=seed,
-                                   workers=workers or os.cpu_count() or 1, engine=engine, address=address,
+                                   workers=_workers(workers), engine=engine, address=address,
                                    metric=m, cup=cup, progress=advance)
         if not as_json:
             known = bool(the_task.metrics)  # the paper's known-objects table: accuracy and Spearman too
-            rows = [{"policy": f"analytic-{m}" if policy == "analytic" else policy, "set": r["set"],
+            rows = [{"policy": r["label"], "set": r["set"],
                      "trials": r["trials"], "AP": r["ap"], "success": r["success_rate"],
                      **({"accuracy": r["accuracy_q"], "spearman": r["spearman_q"]} if known else {}),
                      "label_precision": r["label_precision"], "picks_per_hour": r["picks_per_hour"],
@@ -526,6 +526,11 @@ def bench_label(
         return result
 
     _run(as_json, body)
+
+
+def _workers(requested: int) -> int:
+    """--workers: 0 means every core."""
+    return requested or os.cpu_count() or 1
 
 
 def _print_kv(title: str, result: dict[str, Any]) -> None:
@@ -708,7 +713,7 @@ def objects_generate(
         if count < 1:
             raise InputError(f"--count {count}: must be at least 1")
         with _progress(count, "generating", not as_json) as advance:
-            summary = generate_corpus(count, seed, out, workers=workers or os.cpu_count() or 1, progress=advance)
+            summary = generate_corpus(count, seed, out, workers=_workers(workers), progress=advance)
         if not as_json:
             _print_rows("corpus", [{k: v for k, v in summary.items() if not isinstance(v, dict)}])
         return summary
@@ -771,7 +776,7 @@ def bench_generate_cmd(
     def body() -> dict[str, Any]:
         from suctionbench.bench import bench_generate
 
-        result = bench_generate(objects=objects, datapoints=datapoints, workers=workers or os.cpu_count() or 1,
+        result = bench_generate(objects=objects, datapoints=datapoints, workers=_workers(workers),
                                 seed=seed)
         if not as_json:
             _print_kv("bench generate", result)
@@ -896,10 +901,7 @@ def model_show(
             "command": card.get("command"), "versions": card.get("versions"),
         }
         if not as_json:
-            table = Table(title=str(directory), show_header=False)
-            for key, value in summary.items():
-                table.add_row(key, f"{value:.4g}" if isinstance(value, float) else str(value))
-            Console().print(table)
+            _print_kv(str(directory), summary)
         return summary
 
     _run(as_json, body)

@@ -89,10 +89,10 @@ class GenerationConfig:
 
 @dataclass(frozen=True)
 class Unit:
-    """One deterministic piece of work: `quota` datapoints from object `object_index`."""
+    """One deterministic piece of work: `quota` datapoints from object number `index` (one unit
+    per object)."""
 
     index: int
-    object_index: int
     quota: int
 
 
@@ -101,7 +101,7 @@ def plan_units(num_objects: int, datapoints: int) -> list[Unit]:
     if num_objects < 1:
         raise InputError("generate: no objects to generate from")
     base, extra = divmod(datapoints, num_objects)
-    return [Unit(i, i, base + (1 if i < extra else 0)) for i in range(num_objects) if base or i < extra]
+    return [Unit(i, base + (1 if i < extra else 0)) for i in range(num_objects) if base or i < extra]
 
 
 def config_fingerprint(config: GenerationConfig, camera: dict[str, Any], objects: list[str]) -> str:
@@ -176,7 +176,7 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
             out["hand_poses"].append(np.column_stack([pixels[idx, 1], pixels[idx, 0], pose_vec, v_cam[idx]])
                                      .astype(np.float32))
             out["robust_suction_wrench_resistance"].append(lab.rwr[idx].astype(np.float32))
-            out["object_labels"].append(np.full(len(idx), unit.object_index, np.int32))
+            out["object_labels"].append(np.full(len(idx), unit.index, np.int32))
             out["pose_labels"].append(np.full(len(idx), s, np.int32))
             out["image_labels"].append(np.full(len(idx), unit.index * MAX_IMAGES_PER_UNIT + image, np.int32))
             out["grasp_labels"].append(idx.astype(np.int32))
@@ -231,7 +231,7 @@ def run_units(
     """Yield (unit, arrays) in unit order, computed by the chosen engine (suctionbench.parallel)."""
     from suctionbench.parallel import map_ordered
 
-    args = [(u, object_dirs[u.object_index], camera, config) for u in units]
+    args = [(u, object_dirs[u.index], camera, config) for u in units]
     results = map_ordered(generate_unit, args, engine=engine, workers=workers, address=address)
     yield from zip(units, results, strict=True)
 
@@ -280,7 +280,7 @@ def generate_dataset(
         "fingerprint": fingerprint, "suctionbench_version": __version__, "config": to_dict(config),
         "camera": camera_dict, "objects": object_keys, "status": "generating",
     }
-    write_card(out, card)
+    write_card(out, card, datapoints_per_shard=config.datapoints_per_shard)
 
     units = plan_units(len(object_dirs), config.datapoints)
     todo, corrupt = [], []
@@ -303,7 +303,7 @@ def generate_dataset(
     stats = _assemble_shards(out, units, writer, config.datapoints_per_shard, config.label_threshold)
     write_splits(out, stats.pop("image_ids"), stats.pop("object_ids"), val_fraction=0.2, seed=config.seed)
     card.update(stats, status="complete", regenerated_corrupt_units=corrupt, rewritten_shard_problems=shard_problems)
-    write_card(out, card)
+    write_card(out, card, datapoints_per_shard=config.datapoints_per_shard)
     return card
 
 

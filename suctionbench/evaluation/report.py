@@ -105,7 +105,7 @@ def _tables(summaries: list[dict[str, Any]]) -> list[Table]:
                    "Sensing: rendering the noisy depth image; planning: the policy's wall time; motion: "
                    "simulated time of the approach, lift and transport. Picks per hour = success rate / cycle.")
     for s in summaries:
-        label = f"{s['policy']}-{s['metric']}" if s["policy"] == "analytic" else s["policy"]
+        label = s["label"]
         success = _percent(s["success_rate"])
         if s["policy"] == "analytic":
             paper = PAPER_KNOWN.get(s["metric"]) if s["set"] == "adversarial" else None
@@ -160,7 +160,7 @@ def build_report(run_dirs: list[Path], out: Path) -> dict[str, Any]:
     for run_dir, summary, records in zip(run_dirs, summaries, all_records, strict=True):
         valid = [r for r in records if r.get("valid")]
         known = summary["policy"] == "analytic"
-        label = f"{summary['policy']}-{summary['metric']}" if known else summary["policy"]
+        label = summary["label"]
         per_object[f"{label} / {summary['set']}"] = summary["per_object"]
         success = np.array([bool(r["success"]) for r in valid])
         q = np.array([np.nan if r.get("policy_q") is None else float(r["policy_q"]) for r in valid])

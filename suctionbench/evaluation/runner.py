@@ -124,7 +124,8 @@ def run_records(run_dir: Path) -> list[dict[str, Any]]:
 
 def summarize_run(run_dir: Path, records: list[dict[str, Any]] | None = None) -> dict[str, Any]:
     """Results table of a run directory, computed from its MCAP logs (`records`: those logs'
-    `run_records`, when the caller has read them already)."""
+    `run_records`, when the caller has read them already). "label" names the run in tables: the
+    policy, with the metric for the analytic one."""
     run_dir = Path(run_dir)
     try:
         run = json.loads((run_dir / "run.json").read_text())
@@ -132,7 +133,8 @@ def summarize_run(run_dir: Path, records: list[dict[str, Any]] | None = None) ->
         raise InputError(f"run '{run_dir}': no run.json (not a suctionbench eval run)") from None
     if records is None:
         records = run_records(run_dir)
-    return {"policy": run["policy"], "task": run["task"]["name"], "set": run["task"]["set"],
+    label = f"{run['policy']}-{run.get('metric')}" if run["policy"] == "analytic" else run["policy"]
+    return {"policy": run["policy"], "label": label, "task": run["task"]["name"], "set": run["task"]["set"],
             "metric": run.get("metric"), **trial_metrics(records)}
 
 

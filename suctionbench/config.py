@@ -17,50 +17,109 @@ from suctionbench.errors import InputError
 
 @dataclass(frozen=True)
 class CupConfig:
-    """A single circular suction cup, as modelled in Dex-Net 3.0 (section "Compliant Suction Contact Model")."""
+    """One physical suction cup, shared by the analytic labeller and the simulated cup.
+
+    Both models read the same numbers and compute independently. docs/physics.md gives the source
+    and derivation of every field; derived quantities (effective area, vacuum force, bending
+    stiffness, approach tolerance, leak threshold, mass cap) are properties, never second copies.
+    The default is a 15 mm silicone single-bellows cup (the paper's) on a small inline ejector.
+    """
 
     name: str = "default"
     """Preset name, recorded in labels, datasets and model cards."""
 
     n_vertices: int = 8
-    """Number n of perimeter vertices of the quasi-static spring model (the paper's figure uses 8)."""
+    """Number n of perimeter vertices of the labeller's quasi-static spring model (the paper's figure
+    uses 8). A discretisation of the analytic model, not a property of the cup."""
 
     radius: float = 0.0075
-    """Cup radius r in metres: the 15 mm diameter silicone cup of the paper's experiments."""
+    """Lip radius r in metres: the outer lip circle of the paper's 15 mm diameter cup. The contact ring
+    of both models and the lever arm of the ring-pressure tilt limit."""
+
+    inner_radius: float = 0.0055
+    """Inner radius of the lip (m). Vendors compute holding force over the effective diameter, the mean
+    of the lip's inner and outer diameter (13 mm here, ~75 % of the outer area)."""
 
     height: float = 0.015
-    """Height h of the undeformed spring cone in metres (the paper leaves it unstated; a 15 mm
-    single-bellow cup is about as tall as it is wide). Sets the rest length sqrt(r^2 + h^2) of the
-    cone springs and so the approach-angle tolerance (about 14 degrees on a flat face at 10 %)."""
+    """Height h of the undeformed cup (m): a 15 mm single-bellows cup is about as tall as it is wide.
+    Sets the rest length sqrt(r^2 + h^2) of the labeller's cone springs."""
 
     stretch_limit: float = 0.10
-    """Largest allowed relative change in length of any spring, |L - L0| / L0 (Provot 1995, used by
-    the paper's appendix on seal formation)."""
+    """Largest allowed relative change in length of any spring of the labeller's model,
+    |L - L0| / L0 (Provot 1995, used by the paper's appendix on seal formation)."""
 
-    vacuum_force: float = 50e3 * math.pi * 0.0075**2
-    """Constant vacuum force V in newtons pulling the object into the cup. Default: 50 kPa of
-    vacuum over the cup area pi r^2 = 8.84 N, consistent with the real system's ~0.9 kg payload."""
+    vacuum_pressure: float = 60e3
+    """Vacuum (Pa below atmosphere) the ejector reaches with a perfect seal (zero flow). 60 kPa is the
+    level vendors quote holding forces at (-0.6 bar)."""
 
-    kappa: float = 50e3 * math.pi * 0.0075**2 / (2 * math.pi)
-    """Material limit kappa (N per radian of ring) bounding the tilt amplitudes p_x, p_y of the ring
-    pressure p(theta) = p0 + p_x cos(theta) + p_y sin(theta); elastic torques obey
-    sqrt(2)|tau_x|, sqrt(2)|tau_y| <= pi r kappa. Default: V / (2 pi), the largest tilt amplitude
-    that keeps every point of the lip in compression (p(theta) >= 0) under the vacuum preload
-    alone (p0 = V / 2 pi), so the lip does not peel off."""
+    ejector_flow: float = 16.0 / 60000.0
+    """Free-air suction capacity of the ejector (m^3/s, at zero vacuum): 16 l/min, a small inline
+    ejector of the kind mounted at a 15 mm cup. The ejector curve is taken as linear between
+    (0 flow, vacuum_pressure) and (ejector_flow, 0 vacuum)."""
+
+    discharge_coefficient: float = 0.6
+    """Discharge coefficient C_d of a leak treated as a sharp-edged orifice, Q = C_d A sqrt(2 p / rho)."""
+
+    seal_gap: float = 3e-4
+    """Local gap (m) between lip and surface that the lip's thin edge closes by itself when the vacuum
+    pulls it down; only gap beyond it leaks."""
+
+    vacuum_switch_fraction: float = 0.5
+    """A seal counts as made while the equilibrium vacuum is at least this fraction of vacuum_pressure
+    (the set point of an ejector's part-present switch). Defines the leak threshold area."""
+
+    lip_travel: float = 0.002
+    """Axial distance (m) each point of the soft lip can fold independently of its neighbours before
+    the bellows' convolution takes over: how far the lip conforms to a curved surface. Cylinders of
+    radius down to r^2 / (2 lip_travel) can be sealed."""
+
+    stroke: float = 0.006
+    """Axial travel of the bellows (m), 40 % of the cup height."""
+
+    axial_stiffness: float = 1500.0
+    """Bellows spring rate along the axis (N/m): a 15 mm single bellows compresses ~5 mm under ~7 N."""
 
     friction: float = 0.5
-    """Nominal Coulomb friction coefficient mu between cup and object (the mean of the paper's
-    truncated-normal friction distribution)."""
+    """Nominal Coulomb friction coefficient mu between lip and object: ~0.5 for a dry silicone lip
+    (Schmalz; 0.2-0.3 wet, 0.1-0.3 oily)."""
+
+    safety_factor: float = 1.5
+    """Safety factor S on the holding force against weight plus inertial load (German UVV: >= 1.5;
+    Schmalz recommends 2). Sets the mass cap of the object sets."""
+
+    peak_acceleration: float = 3.1
+    """Largest acceleration (m/s^2) of the cup during the pick episode (lift and transport, measured on
+    the episode's motion profile). The inertial load m a of the labeller's disturbing wrench."""
+
+    vacuum_force_override: float | None = None
+    """Constant vacuum force V (N) used instead of pressure x effective area; only for the `paper`
+    preset's literal, fitted V = 250."""
+
+    kappa: float | None = None
+    """The paper's material limit kappa (sqrt(2)|tau_x|, sqrt(2)|tau_y| <= pi r kappa, a box). None (the
+    physical default) uses the ring-pressure limit ||tau|| <= r (V + f_z) / 2 instead: the paper's
+    own condition p(theta) >= 0 around the lip, a circle that shrinks as the load pulls the lip off."""
 
     def __post_init__(self) -> None:
         checks = {
             "n_vertices": self.n_vertices >= 3,
             "radius": 0.0 < self.radius < 1.0,
+            "inner_radius": 0.0 <= self.inner_radius < self.radius,
             "height": 0.0 < self.height < 1.0,
             "stretch_limit": 0.0 < self.stretch_limit < 10.0,
-            "vacuum_force": self.vacuum_force > 0.0,
-            "kappa": self.kappa > 0.0,
+            "vacuum_pressure": 0.0 < self.vacuum_pressure <= 101325.0,
+            "ejector_flow": self.ejector_flow > 0.0,
+            "discharge_coefficient": 0.0 < self.discharge_coefficient <= 1.0,
+            "seal_gap": 0.0 <= self.seal_gap < self.radius,
+            "vacuum_switch_fraction": 0.0 < self.vacuum_switch_fraction < 1.0,
+            "lip_travel": 0.0 < self.lip_travel < self.height,
+            "stroke": 0.0 < self.stroke < self.height,
+            "axial_stiffness": self.axial_stiffness > 0.0,
             "friction": 0.0 <= self.friction <= 10.0,
+            "safety_factor": self.safety_factor >= 1.0,
+            "peak_acceleration": self.peak_acceleration >= 0.0,
+            "vacuum_force_override": self.vacuum_force_override is None or self.vacuum_force_override > 0.0,
+            "kappa": self.kappa is None or self.kappa > 0.0,
         }
         for key, ok in checks.items():
             value = getattr(self, key)
@@ -68,19 +127,80 @@ class CupConfig:
                 raise InputError(f"cup config: {key} = {value!r} is out of range")
 
     @property
+    def effective_radius(self) -> float:
+        """Radius (m) of the effective suction area: the mean of the lip's inner and outer radius."""
+        return 0.5 * (self.radius + self.inner_radius)
+
+    @property
+    def effective_area(self) -> float:
+        """Area (m^2) the vacuum acts on: pi r_eff^2."""
+        return math.pi * self.effective_radius**2
+
+    @property
+    def vacuum_force(self) -> float:
+        """Vacuum force V (N) at full vacuum: vacuum_pressure x effective_area (7.96 N by default),
+        unless the preset overrides it."""
+        if self.vacuum_force_override is not None:
+            return self.vacuum_force_override
+        return self.vacuum_pressure * self.effective_area
+
+    @property
+    def bending_stiffness(self) -> float:
+        """Tilt stiffness of the bellows (N m/rad). A thin-walled bellows of mean radius r_m whose
+        wall carries the axial rate k spread evenly round its circumference resists a tilt theta
+        with moment int (k / 2 pi r_m) (r_m theta cos phi) r_m cos phi r_m dphi = k r_m^2 theta / 2."""
+        return 0.5 * self.axial_stiffness * self.effective_radius**2
+
+    @property
+    def approach_tolerance(self) -> float:
+        """Largest angle (rad) between the approach axis and a flat surface's normal at which the lip
+        still lands flat: the bellows tilts until one side has used its whole stroke while the
+        opposite side is uncompressed, tan(phi) = stroke / (2 r) (21.8 deg by default)."""
+        return math.atan2(self.stroke, 2.0 * self.radius)
+
+    @property
+    def min_seal_radius(self) -> float:
+        """Smallest radius (m) of a cylinder the lip conforms to: the lip circle's sag on a cylinder of
+        radius R is r^2 / (2 R) (small-sag approximation), at most lip_travel (14.1 mm by default)."""
+        return self.radius**2 / (2.0 * self.lip_travel)
+
+    @property
+    def leak_threshold_area(self) -> float:
+        """Leak area (m^2) at which the equilibrium vacuum falls to the switch point (see vacuum.py)."""
+        from suctionbench.vacuum import leak_area_at_pressure
+
+        return float(leak_area_at_pressure(self.vacuum_switch_fraction * self.vacuum_pressure, self))
+
+    @property
     def payload_kg(self) -> float:
-        """Largest mass the vacuum alone can hold against gravity (V / g)."""
+        """Largest mass the vacuum alone can hold against gravity (V / g), no margin."""
         return self.vacuum_force / STANDARD_GRAVITY
+
+    @property
+    def mass_cap_kg(self) -> float:
+        """Heaviest object the cup may carry: V / (S (g + a_peak)), weight plus the episode's peak
+        inertial load with the safety factor (0.411 kg by default)."""
+        return self.vacuum_force / (self.safety_factor * (STANDARD_GRAVITY + self.peak_acceleration))
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> CupConfig:
+        """Build from a plain dict (a dataset or model card), ignoring keys this version does not know
+        (cards written before the physical cup stored `vacuum_force` as a field)."""
+        known = {f.name for f in dataclasses.fields(cls)}
+        kwargs = {k: v for k, v in data.items() if k in known}
+        return cls(**kwargs)
 
 
 STANDARD_GRAVITY = 9.80665
 """Standard gravity in m/s^2."""
 
 CUP_DEFAULT = CupConfig()
-"""Physically grounded cup: V = 50 kPa x pi r^2, kappa = V / (2 pi)."""
+"""The physical cup: 15 mm silicone bellows, 60 kPa ejector, V = 60 kPa x pi (6.5 mm)^2 = 7.96 N,
+ring-pressure tilt limit."""
 
-CUP_PAPER = CupConfig(name="paper", vacuum_force=250.0, kappa=0.005)
-"""The paper's literal values, V = 250 N and kappa = 0.005 (units as the paper states them)."""
+CUP_PAPER = CupConfig(name="paper", vacuum_force_override=250.0, kappa=0.005)
+"""The paper's literal values, V = 250 N and kappa = 0.005 (units as the paper states them): fitted by
+grid search against its robot trials, not physical constants."""
 
 
 CUP_PRESETS: dict[str, CupConfig] = {"default": CUP_DEFAULT, "paper": CUP_PAPER}

@@ -100,8 +100,15 @@ class CupConfig:
     physical default) uses the ring-pressure limit ||tau|| <= r (V + f_z) / 2 instead: the paper's
     own condition p(theta) >= 0 around the lip, a circle that shrinks as the load pulls the lip off."""
 
+    seal_model: str = "lip"
+    """Seal test of the labeller: "lip" (the physical lip: the bellows tilts up to the approach
+    tolerance, the lip folds up to lip_travel and bridges what it cannot bend into, the leak area
+    sets the vacuum; suctionbench/contact/seal.py) or "springs" (the paper's literal quasi-static
+    spring model with its stretch limit, constant V; the `paper` preset)."""
+
     def __post_init__(self) -> None:
         checks = {
+            "seal_model": self.seal_model in SEAL_MODELS,
             "n_vertices": self.n_vertices >= 3,
             "radius": 0.0 < self.radius < 1.0,
             "inner_radius": 0.0 <= self.inner_radius < self.radius,
@@ -191,6 +198,9 @@ class CupConfig:
         return cls(**kwargs)
 
 
+SEAL_MODELS = ("lip", "springs")
+"""The labeller's seal tests, see CupConfig.seal_model."""
+
 STANDARD_GRAVITY = 9.80665
 """Standard gravity in m/s^2."""
 
@@ -198,9 +208,9 @@ CUP_DEFAULT = CupConfig()
 """The physical cup: 15 mm silicone bellows, 60 kPa ejector, V = 60 kPa x pi (6.5 mm)^2 = 7.96 N,
 ring-pressure tilt limit."""
 
-CUP_PAPER = CupConfig(name="paper", vacuum_force_override=250.0, kappa=0.005)
+CUP_PAPER = CupConfig(name="paper", vacuum_force_override=250.0, kappa=0.005, seal_model="springs")
 """The paper's literal values, V = 250 N and kappa = 0.005 (units as the paper states them): fitted by
-grid search against its robot trials, not physical constants."""
+grid search against its robot trials, not physical constants; with the paper's spring seal model."""
 
 
 CUP_PRESETS: dict[str, CupConfig] = {"default": CUP_DEFAULT, "paper": CUP_PAPER}
@@ -225,6 +235,17 @@ class SealConfig:
     collision_tolerance: float = 2e-4
     """Depth in metres by which the surface may rise above a cone face before it counts as a
     collision: absorbs mesh tessellation and single-precision ray-cast error."""
+
+    lip_samples: int = 48
+    """Places on the lip circle where the "lip" seal model measures the surface (rounded up to a
+    multiple of the cup's n_vertices, which are among them). 48 on the 15 mm cup's 47 mm lip are
+    0.98 mm apart, so a 2 mm groove crossing the lip covers at least two of them."""
+
+    def __post_init__(self) -> None:
+        if self.lip_samples < 32:
+            raise InputError(f"seal config: lip_samples = {self.lip_samples} must be >= 32")
+        if self.edge_samples < 0:
+            raise InputError(f"seal config: edge_samples = {self.edge_samples} must be >= 0")
 
 
 @dataclass(frozen=True)
@@ -267,6 +288,19 @@ class PerturbationConfig:
     force_noise_std: float = 0.01
     """Std (N) of the isotropic Gaussian noise added to the gravity force."""
 
+    inertial_acceleration: float = 0.0
+    """Peak acceleration a (m/s^2) of the cup while it carries the object; 0 (the paper's
+    quasi-static model) leaves only gravity. With a > 0 every sample must also resist the inertial
+    load -m a of the two motions of a pick: the lift (a straight up, so the object hangs with
+    m (g + a)) and the transport (a horizontal, at an azimuth drawn per sample from the grasp's
+    keyed stream). `for_episode` sets it to the cup's peak acceleration."""
+
+    @classmethod
+    def for_episode(cls, cup: CupConfig, **kwargs: Any) -> PerturbationConfig:
+        """The environment model of a pick episode: the paper's perturbations plus the inertial load
+        of the cup's peak acceleration (cup.peak_acceleration)."""
+        return cls(inertial_acceleration=cup.peak_acceleration, **kwargs)
+
     def __post_init__(self) -> None:
         if self.num_samples < 1:
             raise InputError(f"perturbation config: num_samples = {self.num_samples} must be >= 1")
@@ -304,6 +338,12 @@ class LabelConfig:
 
     metric: MetricConfig = field(default_factory=MetricConfig)
     """Baseline-metric parameters."""
+
+    @classmethod
+    def for_episode(cls, cup: CupConfig = CUP_DEFAULT, **kwargs: Any) -> LabelConfig:
+        """Labels for grasps a pick episode executes: `cup`, and perturbations that include the
+        inertial load of its peak acceleration (PerturbationConfig.for_episode)."""
+        return cls(cup=cup, perturbation=PerturbationConfig.for_episode(cup), **kwargs)
 
 
 def cup_preset(name: str) -> CupConfig:

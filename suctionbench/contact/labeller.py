@@ -10,7 +10,7 @@ import trimesh
 
 from suctionbench.config import STANDARD_GRAVITY, LabelConfig
 from suctionbench.contact.metrics import METRICS, GraspLabels
-from suctionbench.contact.robust import ObjectState, robust_wrench_resistance
+from suctionbench.contact.robust import ObjectState, inertial_forces, robust_wrench_resistance
 from suctionbench.contact.seal import SealModel, SealResult
 from suctionbench.contact.wrench import external_wrench_at_contact, resists
 from suctionbench.errors import InputError
@@ -20,6 +20,10 @@ from suctionbench.geometry.raycast import RayCaster
 
 DEFAULT_MASS = 1.0
 """Mass (kg) assumed when the object's mass is unknown, as in the paper."""
+
+NOMINAL_TRANSPORT_AZIMUTHS = np.array([0.0, 0.5, 1.0, 1.5]) * np.pi
+"""Transport directions (rad round the vertical, from the contact frame's x axis) the nominal wrench
+test checks when the perturbation model has an inertial load: the worst of four horizontal ones."""
 
 
 class SuctionLabeller:
@@ -70,14 +74,24 @@ class SuctionLabeller:
     def wrench_resistance(
         self, points: np.ndarray, approaches: np.ndarray, seal: SealResult | None = None
     ) -> np.ndarray:
-        """Nominal (unperturbed) wrench resistance against gravity: seal and resist."""
+        """Nominal (unperturbed) wrench resistance: seal, and resist the weight with the vacuum the
+        seal holds. With an inertial load in the perturbation model, also the lift and transport
+        loads (the transport at four horizontal directions, NOMINAL_TRANSPORT_AZIMUTHS)."""
         points, approaches = _check_grasps(points, approaches)
         frames = self.frames(points, approaches)
         seal = seal or self.seal_model.evaluate(points, frames)
-        force = np.broadcast_to(self.object.gravity_force, points.shape)
+        weight = np.broadcast_to(self.object.gravity_force, points.shape)
+        loads = weight[:, None, :]
+        accel = self.config.perturbation.inertial_acceleration
+        if accel > 0.0:
+            azimuths = np.broadcast_to(NOMINAL_TRANSPORT_AZIMUTHS, (len(points), len(NOMINAL_TRANSPORT_AZIMUTHS)))
+            loads = weight[:, None, :] + inertial_forces(self.object.mass, self.object.gravity, accel, frames, azimuths)
         com = np.broadcast_to(self.object.com, points.shape)
-        wrench = external_wrench_at_contact(force, com, seal.ring_centre, frames)
-        return seal.seal & resists(wrench, self.config.cup.friction, self.config.cup)
+        ok = seal.seal.copy()
+        for case in range(loads.shape[1]):
+            wrench = external_wrench_at_contact(loads[:, case], com, seal.ring_centre, frames)
+            ok &= resists(wrench, self.config.cup.friction, self.config.cup, seal.vacuum_force)
+        return ok
 
     def robust(
         self,

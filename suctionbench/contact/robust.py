@@ -8,6 +8,18 @@ on the same mesh in the mesh's own frame (one batched ray cast for all grasps x 
 gravity rotated into the perturbed object frame. All perturbations are drawn in the nominal
 grasp's contact frame from a random stream keyed by (seed, grasp id), so a grasp's label does not
 depend on which other grasps share its batch, and labels move with the object under rigid motions.
+
+Inertial load (PerturbationConfig.inertial_acceleration = a > 0). The paper's model is
+quasi-static; a pick episode is not: the cup accelerates the object at up to a (3.1 m/s^2 for the
+default cup's episode), and in the cup's frame the object then feels the d'Alembert force -m a_cup
+on top of its weight. The two motions of a pick point it two ways, and a grasp must survive both:
+the lift (a_cup straight up, so the object hangs with m (g + a)) and the transport (a_cup
+horizontal, direction unknown when labelling: its azimuth round the vertical is drawn uniformly per
+sample from the grasp's keyed stream, after the paper's 19 draws so that a = 0 reproduces the
+paper's labels bit for bit). A sample resists iff it resists every load case. The static weight
+needs no case of its own: it lies on the segment between the zero wrench and the lift case, and
+the set of resisted wrenches is convex. The azimuth is measured from the nominal contact frame's x
+axis projected on the horizontal, so labels stay invariant under rigid motions.
 """
 
 from __future__ import annotations
@@ -65,6 +77,37 @@ class GraspSamples:
     friction: np.ndarray
     """(N*J,) friction coefficients."""
 
+    inertial: np.ndarray
+    """(N*J, L, 3) inertial force -m a_cup of each load case (lift, transport) in the perturbed mesh
+    frame; L = 0 without inertial load."""
+
+    @property
+    def loads(self) -> np.ndarray:
+        """(N*J, max(L, 1), 3) the disturbing forces a sample must resist, one per load case."""
+        if self.inertial.shape[1] == 0:
+            return self.force[:, None, :]
+        return self.force[:, None, :] + self.inertial
+
+
+def inertial_forces(
+    mass: float, gravity: np.ndarray, acceleration: float, frames: np.ndarray, azimuths: np.ndarray
+) -> np.ndarray:
+    """(N, 1 + A, 3) inertial forces -m a_cup of a pick's motions, in the mesh frame: the lift
+    (a_cup = a straight up: m a along gravity) and one transport per azimuth in `azimuths` (N, A)
+    (a_cup = a horizontal, at that angle round the vertical from the contact frame's x axis)."""
+    gravity = np.asarray(gravity, dtype=float)
+    norm = float(np.linalg.norm(gravity))
+    count = len(frames)
+    down = np.broadcast_to(gravity / norm, (count, 3)) if norm > 0 else frames[:, :, 2]  # no gravity: along v
+    ref = frames[:, :, 0] - np.einsum("ni,ni->n", frames[:, :, 0], down)[:, None] * down
+    alt = frames[:, :, 1] - np.einsum("ni,ni->n", frames[:, :, 1], down)[:, None] * down
+    ref = np.where((np.linalg.norm(ref, axis=1) > 1e-6)[:, None], ref, alt)
+    h0 = ref / np.linalg.norm(ref, axis=1, keepdims=True)
+    h1 = np.cross(down, h0)
+    horizontal = np.cos(azimuths)[..., None] * h0[:, None] + np.sin(azimuths)[..., None] * h1[:, None]
+    lift = (mass * acceleration) * down[:, None, :]
+    return np.concatenate([lift, -(mass * acceleration) * horizontal], axis=1)
+
 
 def truncated_normal(u: np.ndarray, mean: float, std: float, low: float, high: float) -> np.ndarray:
     """Map uniforms u in [0, 1) to a normal(mean, std) truncated to [low, high] (inverse CDF)."""
@@ -87,8 +130,13 @@ def sample_perturbations(
     count, j = len(points), config.num_samples
     ids = np.arange(count) if grasp_ids is None else np.asarray(grasp_ids)
     noise = np.empty((count, j, 19))
+    inertial = config.inertial_acceleration > 0.0
+    azimuth = np.empty((count, j))
     for row, gid in enumerate(ids):  # one short stream per grasp: batch-independent labels
-        noise[row] = np.random.default_rng((int(seed), int(gid))).standard_normal((j, 19))
+        stream = np.random.default_rng((int(seed), int(gid)))
+        noise[row] = stream.standard_normal((j, 19))
+        if inertial:  # drawn after the paper's perturbations, which a = 0 leaves untouched
+            azimuth[row] = 2.0 * np.pi * stream.random(j)
     noise[:, :, 18] = ndtr(noise[:, :, 18])  # the friction draw, as a uniform
 
     def in_world(cols: slice, std: float) -> np.ndarray:
@@ -113,12 +161,20 @@ def sample_perturbations(
     mu = truncated_normal(
         noise[:, :, 18], cup.friction, config.friction_std, config.friction_min, config.friction_max
     )
+    if inertial:  # (N, J, 2, 3): lift and transport, rotated into the perturbed object frame
+        cases = inertial_forces(obj.mass, obj.gravity, config.inertial_acceleration, frames, azimuth)
+        lift = np.broadcast_to(cases[:, None, 0], (count, j, 3))
+        cases = np.stack([lift, cases[:, 1:]], axis=2)
+        extra = np.einsum("nsij,nskj->nski", inv, cases).reshape(-1, 2, 3)
+    else:
+        extra = np.zeros((count * j, 0, 3))
     return GraspSamples(
         points=p_obj.reshape(-1, 3),
         frames=f_obj.reshape(-1, 3, 3),
         com=(com + com_shift).reshape(-1, 3),
         force=force.reshape(-1, 3),
         friction=mu.reshape(-1),
+        inertial=extra,
     )
 
 
@@ -128,31 +184,40 @@ def evaluate_samples(seal: SealModel, samples: GraspSamples) -> np.ndarray:
     cup = seal.cup
     for start in range(0, len(out), CHUNK_SAMPLES):
         sl = slice(start, start + CHUNK_SAMPLES)
-        gate = _wrench_gate(samples.force[sl], samples.com[sl], samples.frames[sl], samples.friction[sl], cup)
+        gate = _wrench_gate(samples.loads[sl], samples.com[sl], samples.frames[sl], samples.friction[sl], cup)
         out[sl] = seal.evaluate(samples.points[sl], samples.frames[sl], gate=gate)
     return out
 
 
-def _wrench_gate(force: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.ndarray, cup: CupConfig):
-    """The closed-form wrench test as a seal-model gate: it only needs the ring centres."""
+def _wrench_gate(loads: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.ndarray, cup: CupConfig):
+    """The closed-form wrench test of every load case as a seal-model gate: it only needs the ring
+    centres and the vacuum force (resistance only grows with V, as the gate must)."""
 
-    def gate(idx: np.ndarray, centres: np.ndarray) -> np.ndarray:
-        wrench = external_wrench_at_contact(force[idx], com[idx], centres, frames[idx])
-        return resists(wrench, mu[idx], cup)
+    def gate(idx: np.ndarray, centres: np.ndarray, vacuum: np.ndarray) -> np.ndarray:
+        ok = np.ones(len(idx), dtype=bool)
+        for case in range(loads.shape[1]):
+            wrench = external_wrench_at_contact(loads[idx, case], com[idx], centres, frames[idx])
+            ok &= resists(wrench, mu[idx], cup, vacuum)
+        return ok
 
     return gate
 
 
 def evaluate_samples_reference(seal: SealModel, samples: GraspSamples) -> np.ndarray:
-    """Reference path: per sample, one full seal evaluation and one QP, in a Python loop."""
+    """Reference path: per sample, one full seal evaluation and one cone program per load case,
+    in a Python loop."""
     out = np.zeros(len(samples.points), dtype=bool)
+    loads = samples.loads
     for i in range(len(out)):
         result = seal.evaluate(samples.points[i : i + 1], samples.frames[i : i + 1])
         if not result.seal[0]:
             continue
-        out[i], _ = resists_qp(
-            samples.force[i], samples.com[i], result.ring_centre[0], samples.frames[i],
-            float(samples.friction[i]), seal.cup,
+        out[i] = all(
+            resists_qp(
+                load, samples.com[i], result.ring_centre[0], samples.frames[i], float(samples.friction[i]),
+                seal.cup, vacuum_force=float(result.vacuum_force[0]),
+            )[0]
+            for load in loads[i]
         )
     return out
 

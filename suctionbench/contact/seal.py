@@ -1,26 +1,72 @@
-"""Quasi-static spring seal formation (Dex-Net 3.0, "Details of Quasi-Static Spring Seal Formation Model").
+"""Seal formation: the physical lip (default) and the paper's quasi-static spring model.
 
-The cup is a right pyramid of springs: n perimeter vertices v_i on a regular n-gon of circumradius
-r, an apex a at height h. Perimeter springs join v_i and v_i+1, flexion springs v_i and v_i+2,
-cone springs v_i and a. For a grasp (p, v):
+Both models probe the surface by casting rays along the approach v from the plane orthogonal to v
+through the target p; "depth" is the distance along v beyond that plane. Both share:
 
-1. Perimeter: the n-gon is placed in the plane orthogonal to v through p and every perimeter
-   point is projected along v onto the mesh (first hit), so the ring keeps its shape seen along v.
-   Each perimeter spring's deformed length is the length of its path on the surface inside the
-   prism face, measured through `edge_samples` extra surface points per spring.
-2. Apex: on the approach line, at the height that keeps the mean displacement along v between apex
-   and vertices equal to h, and never beyond the surface: a = p_s + t* v with
-   t* = min(mean_i (v_i - p_s).v - h, 0), where p_s is the target projected onto the surface along
-   v. (The paper prints a* = p - t* v, which with this t* would put the apex inside the object;
-   its own constraint v.(a - p) <= 0 fixes the sign used here.)
-3. Feasible iff: every perimeter point lands on the outside of the surface (else the lip hangs in
-   the air: `ring_off_surface`); no ray inside the ring passes through a gap in the surface
-   (`hole`: a miss or a hit on a back face); the surface inside the footprint nowhere rises above
-   the pyramid's triangular cone faces (a, v_i, v_i+1) (`cone_collision`: anything the faces would
-   have to pass through, during the approach along v or in contact); and every spring's relative
-   change in length is within the stretch limit (`stretch`).
+- the ring: the n perimeter vertices v_i of a regular n-gon of circumradius r around the axis,
+  projected along v onto the mesh (first hit). A vertex that misses leaves the lip in the air
+  (`ring_off_surface`). Their mean depth places the ring centre, the contact origin of the wrench
+  model;
+- the cup body: the apex a on the approach line, at the height that keeps the mean displacement
+  along v between apex and vertices equal to h, and never beyond the surface: a = p_s + t* v with
+  t* = min(mean_i (v_i - p_s).v - h, 0), p_s the target projected onto the surface (the paper
+  prints a* = p - t* v, which with this t* would put the apex inside the object; its own
+  constraint v.(a - p) <= 0 fixes the sign used here). The surface inside the footprint must
+  nowhere rise above the triangular faces (a, v_i, v_i+1) (`cone_collision`: the cup would have
+  to pass through it), and no ray inside the ring may pass through a gap in the surface (`hole`:
+  a miss or a hit on a back face);
+- the springs of the paper (perimeter v_i v_i+1, flexion v_i v_i+2, cone v_i a) and their
+  stretches, reported for the spring-stretch metric.
 
-Depths below are distances along v beyond the plane orthogonal to v through p.
+**Springs** (the paper's "Details of Quasi-Static Spring Seal Formation Model", `paper` preset):
+each perimeter spring's deformed length is its path on the surface through `edge_samples` extra
+points on the chord; a seal needs every spring's relative change in length within the stretch
+limit (`stretch`), and the vacuum is the constant V. On a flat face this caps the approach tilt
+where the longest cone spring reaches the limit (13.9 deg for the 15 mm cup).
+
+**Lip** (the physical cup, default). The lip is measured at K >= 32 places on its circle
+(`lip_samples`, 0.98 mm apart by default), depths d_k. Four pieces of physics decide the seal:
+
+1. *The bellows tilts and compresses.* The bellows' end carries the lip and settles where the lip's
+   spring forces (the paper's p(theta) = k delta(theta)) have no net moment about the axis, i.e.
+   where the lip's fold delta(theta) has no first harmonic: the end plane is the least-squares
+   first-harmonic fit P(theta) = c0 + a cos(theta) + b sin(theta) of the profile the lip rests
+   on. The bellows can tilt until one side has used its whole stroke while the other is
+   uncompressed: sqrt(a^2 + b^2) <= stroke / 2, i.e. a tilt of at most
+   atan(stroke / (2 r)) = cup.approach_tolerance (21.8 deg); beyond it, `tilt`.
+2. *The lip bends, but only so tightly.* A lip point folds independently of its neighbours up to
+   lip_travel; on a cylinder of radius R lying on its side the lip circle's profile is
+   z(s) = (r^2 / 2R) sin^2(s / r) along its arc length s, whose sag r^2 / (2R) must stay within
+   lip_travel: R >= R_min = r^2 / (2 lip_travel) = cup.min_seal_radius (14.1 mm). That profile's
+   curvature z'' = cos(2 s / r) / R is at most 1 / R, so the smallest cylinder the lip seals is
+   also the tightest bend it makes: the lip bends along its circumference with radius >= R_min
+   and bridges anything narrower. The profile the lip can rest on is the morphological closing
+   of the surface profile by a disc of radius R_min rolled along the lip from the cup's side
+   (parabolic in the small-slope approximation, s^2 / (2 R_min)): a 2 mm groove lets the lip in
+   by only 1^2 / (2 x 14.1) = 0.04 mm, so the lip spans it and the groove stays open beneath.
+   The window of the closing is +-r of arc: further away the rolled disc has risen by
+   r^2 / (2 R_min) = lip_travel, more than the lip can fold anyway (item 3 covers that).
+3. *The lip folds at most lip_travel.* The vacuum pulls the cup on until the lip is folded flat
+   where the bridged profile comes nearest the cup (relative to the bellows plane P); from there
+   the lip reaches lip_travel further. Where the bridged profile lies deeper, a gap remains.
+4. *Leak and vacuum.* The gap under each lip place is (depth - bridged profile) + what lies
+   beyond the fold; the lip's thin edge closes seal_gap by itself, so the leak area is
+   A = sum_k max(0, gap_k - seal_gap) x (2 pi r / K). The ejector holds the vacuum
+   p(A) = suctionbench.vacuum.equilibrium_vacuum (its flow curve against the orifice flow of the
+   leak); the seal is made while p >= vacuum_switch_fraction p_max, i.e. A <= leak_threshold_area
+   (~1.0 mm^2), else `leak`. The vacuum force V(A) (= p(A) x effective area) is the V of the
+   wrench test, so a leaking seal holds less.
+
+The perimeter stretch of the lip model is that of the lip itself, relative to its bellows plane
+(the tilt of the plane stretches nothing: the lip tilts with the bellows), and is still bound by
+the stretch limit; the paper's flexion and cone springs are reported, not tested (the bellows
+tilt replaces the cone springs' limit). Where the lip model and the paper's differ: the paper's
+perimeter paths follow chords, so even a sphere stretches them; the lip circle on a sphere lies
+at one depth and stretches nothing.
+
+Cylinders lying on their side therefore seal down to ~R_min (slightly below: the first seal_gap
+of excess and a small leak are tolerated, 12.5-13 mm for the default cup), a flat face seals up to
+the approach tolerance, and a groove crossing the lip leaks.
 """
 
 from __future__ import annotations
@@ -33,14 +79,18 @@ import numpy as np
 
 from suctionbench.config import CupConfig, SealConfig
 from suctionbench.geometry.raycast import RayCaster
+from suctionbench.vacuum import vacuum_force
 
-FAILURES = ("none", "ring_off_surface", "hole", "cone_collision", "stretch")
-"""Seal failure reasons, in the order they are reported (the first that applies wins)."""
+FAILURES = ("none", "ring_off_surface", "hole", "cone_collision", "leak", "tilt", "stretch")
+"""Seal failure reasons, in the order they are reported (the first that applies wins): where the
+lip leaks it usually also stretches (over an edge), and the leak is what loses the vacuum."""
 
-RING_OFF_SURFACE, HOLE, CONE_COLLISION, STRETCH = 1, 2, 3, 4
+RING_OFF_SURFACE, HOLE, CONE_COLLISION, LEAK, TILT, STRETCH = 1, 2, 3, 4, 5, 6
 
-Gate = Callable[[np.ndarray, np.ndarray], np.ndarray]
-"""gate(indices, ring_centres) -> bool mask: a cheap test that lets later ray casts be skipped."""
+Gate = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+"""gate(indices, ring_centres, vacuum_forces) -> bool mask: a cheap test (the wrench test) that
+lets later ray casts be skipped. It must be monotone in the vacuum force: the lip model first asks
+it with the full vacuum, before the leak is known, then again with the vacuum the seal holds."""
 
 
 @dataclass
@@ -57,7 +107,8 @@ class SealResult:
     """Largest relative length change over all springs (inf when the ring is off the surface)."""
 
     perimeter_stretch: np.ndarray
-    """Largest relative length change of the perimeter springs."""
+    """Largest relative length change of the perimeter springs (the lip model: of the lip itself,
+    relative to its bellows plane)."""
 
     flexion_stretch: np.ndarray
     """Largest relative length change of the flexion springs."""
@@ -84,6 +135,18 @@ class SealResult:
     """RMS deviation (m) of the probed surface inside the disc from the plane through the surface
     point orthogonal to v (inf when a probe missed); feeds the planarity-based baselines."""
 
+    tilt: np.ndarray
+    """Tilt (rad) of the lip's bellows plane from the cup plane (lip model; NaN where the lip was
+    not measured, and for the spring model)."""
+
+    leak_area: np.ndarray
+    """Leak area (m^2) under the lip (lip model; inf where the lip is not all on the surface; 0 for
+    the spring model, which assumes a tight seal)."""
+
+    vacuum_force: np.ndarray
+    """Vacuum force V (N) the seal holds: the ejector's equilibrium against the leak (the spring
+    model: the cup's constant V). The wrench test's V."""
+
     @property
     def failure_names(self) -> list[str | None]:
         """Failure reason per grasp as a string, None where sealed."""
@@ -91,18 +154,20 @@ class SealResult:
 
 
 class SealModel:
-    """The spring seal model for one mesh and cup; vectorised over grasps."""
+    """The seal model for one mesh and cup (cup.seal_model picks lip or springs); vectorised over
+    grasps."""
 
     def __init__(self, caster: RayCaster, cup: CupConfig, config: SealConfig | None = None):
         self.caster = caster
         self.cup = cup
         self.config = config or SealConfig()
+        self.lip = cup.seal_model == "lip"
         n, m, r = cup.n_vertices, self.config.edge_samples, cup.radius
         angles = 2.0 * math.pi * np.arange(n) / n
         self.vertices_xy = r * np.stack([np.cos(angles), np.sin(angles)], axis=1)
         s = np.arange(m + 1) / (m + 1)
         nxt = np.roll(self.vertices_xy, -1, axis=0)
-        # Perimeter points, edge by edge: vertex k then its m edge samples.
+        # Perimeter points on the chords, edge by edge: vertex k then its m edge samples.
         self.perimeter_xy = (
             self.vertices_xy[:, None] * (1 - s)[None, :, None] + nxt[:, None] * s[None, :, None]
         ).reshape(-1, 2)
@@ -124,6 +189,20 @@ class SealModel:
         self.segment_xy = self.perimeter_rest / (m + 1)
         self.flexion_rest = 2.0 * r * math.sin(2.0 * math.pi / n)
         self.cone_rest = math.hypot(r, cup.height)
+        # The lip circle: K places, every per-th one a vertex.
+        self.lip_per_edge = -(-self.config.lip_samples // n)
+        k = n * self.lip_per_edge
+        theta = 2.0 * math.pi * np.arange(k) / k
+        self.lip_xy = r * np.stack([np.cos(theta), np.sin(theta)], axis=1)
+        self.lip_vertex = np.arange(k) % self.lip_per_edge == 0
+        self.lip_arc = 2.0 * math.pi * r / k
+        self.lip_chord = 2.0 * r * math.sin(math.pi / k)
+        self.lip_fit = np.stack([np.full(k, 1.0 / k), 2.0 * np.cos(theta) / k, 2.0 * np.sin(theta) / k], axis=1)
+        self.lip_basis = np.stack([np.ones(k), np.cos(theta), np.sin(theta)], axis=1)
+        reach = int(r / self.lip_arc)  # the closing's window: +-r of arc (module doc, item 2)
+        self.bend_offsets = np.arange(-reach, reach + 1)
+        self.bend_rise = (self.bend_offsets * self.lip_arc) ** 2 / (2.0 * cup.min_seal_radius)
+        self.leak_threshold = cup.leak_threshold_area
 
     # -- ray casting -------------------------------------------------------------------------
     def _depths(self, points: np.ndarray, frames: np.ndarray, offsets_xy: np.ndarray):
@@ -149,6 +228,34 @@ class SealModel:
         depth = hits.distance.reshape(-1, k) - start[:, None]
         return depth, hits.back_face.reshape(-1, k)
 
+    # -- the lip -----------------------------------------------------------------------------
+    def lip_profile(self, depth: np.ndarray) -> dict[str, np.ndarray]:
+        """The lip on a measured profile `depth` (S, K) (finite, the lip circle's K places):
+        module doc, items 1-4. Returns the bridged profile, where the lip rests, the gap under each
+        place, the leak area, the bellows plane's tilt and the lip's own perimeter stretch."""
+        height = -depth  # toward the cup; the rolled disc comes from above
+        rest = np.full_like(height, -np.inf)
+        for o, rise in zip(self.bend_offsets, self.bend_rise, strict=True):
+            np.maximum(rest, np.roll(height, -o, axis=1) - rise, out=rest)  # lowest resting disc at y
+        lip = np.full_like(height, np.inf)
+        for o, rise in zip(self.bend_offsets, self.bend_rise, strict=True):
+            np.minimum(lip, np.roll(rest, -o, axis=1) + rise, out=lip)  # envelope of the discs
+        bridged = -lip
+        coef = bridged @ self.lip_fit
+        plane = coef @ self.lip_basis.T
+        e = bridged - plane
+        floor = e.min(axis=1, keepdims=True)
+        beyond = np.maximum(e - floor - self.cup.lip_travel, 0.0)
+        gap = (depth - bridged) + beyond
+        resting = bridged - beyond  # where the lip itself ends up
+        leak = np.maximum(gap - self.cup.seal_gap, 0.0).sum(axis=1) * self.lip_arc
+        tilt = np.arctan(np.hypot(coef[:, 1], coef[:, 2]) / self.cup.radius)
+        fold = np.minimum(e, floor + self.cup.lip_travel)  # the lip itself, relative to its plane
+        rise = np.diff(np.concatenate([fold, fold[:, :1]], axis=1), axis=1)
+        length = np.sqrt(self.lip_chord**2 + rise**2).reshape(len(depth), self.cup.n_vertices, -1).sum(axis=2)
+        stretch = np.abs(length / (self.lip_per_edge * self.lip_chord) - 1.0).max(axis=1)
+        return {"bridged": bridged, "resting": resting, "gap": gap, "leak": leak, "tilt": tilt, "stretch": stretch}
+
     # -- the model ---------------------------------------------------------------------------
     def evaluate(self, points: np.ndarray, frames: np.ndarray, gate: Gate | None = None):
         """Seal model for grasps at `points` (N, 3) with grasp frames `frames` (N, 3, 3).
@@ -163,9 +270,10 @@ class SealModel:
 
     def _evaluate(self, points: np.ndarray, frames: np.ndarray, gate: Gate | None):
         count = len(points)
-        n, cup, tol = self.cup.n_vertices, self.cup, self.config.collision_tolerance
+        n, cup = self.cup.n_vertices, self.cup
         approach = frames[:, :, 2]
         staged = gate is not None
+        full_vacuum = np.full(count, cup.vacuum_force)
 
         # Stage A: the axis and the n vertices fix the ring centre and the apex.
         axis_vertex_xy = np.vstack([np.zeros((1, 2)), self.vertices_xy])
@@ -185,31 +293,41 @@ class SealModel:
         ).max(axis=1)
 
         alive = ~ring_off
-        if staged:
+        if staged:  # a wrench the full vacuum cannot resist is not resisted with less
             alive &= ~hole
             idx = np.flatnonzero(alive)
-            alive[idx] = gate(idx, ring_centre[idx]) & (np.maximum(flexion, cone)[idx] <= cup.stretch_limit)
+            ok = gate(idx, ring_centre[idx], full_vacuum[idx])
+            if not self.lip:
+                ok &= np.maximum(flexion, cone)[idx] <= cup.stretch_limit
+            alive[idx] = ok
 
-        # Stage B: the perimeter paths.
+        # Stage B: the perimeter (springs: chord paths; lip: the lip circle, gap, leak, vacuum).
         idx = np.flatnonzero(alive) if staged else np.arange(count)
-        perimeter = np.full(count, np.inf)
-        d_per = np.full((count, len(self.perimeter_xy)), np.inf)
-        if len(idx):
-            edge_xy = self.perimeter_xy[self.edge_only]
-            d_edge, back_edge = self._depths(points[idx], frames[idx], edge_xy)
-            d_per[np.ix_(idx, np.flatnonzero(self.edge_only))] = d_edge
-            d_per[np.ix_(idx, np.flatnonzero(~self.edge_only))] = d_vert[idx]
-            ring_off[idx] |= ~np.isfinite(d_edge).all(axis=1)
-            hole[idx] |= back_edge.any(axis=1)
-            rise = np.diff(np.concatenate([d_per[idx], d_per[idx, :1]], axis=1), axis=1)
-            length = np.sqrt(self.segment_xy**2 + rise**2).reshape(len(idx), n, -1).sum(axis=2)
-            perimeter[idx] = np.abs(length / self.perimeter_rest - 1.0).max(axis=1)
+        if self.lip:
+            perimeter, d_per, tilt, leak, vacuum, resting = self._lip_stage(points, frames, idx, d_vert, ring_off, hole)
+            # the cup body ends where the lip rests (it spans what it bridges), not in a groove
+            rim = np.where(np.isfinite(resting), resting, d_vert)
+            apex = np.minimum(rim.mean(axis=1) - cup.height, d_axis)  # the body stands on the lip
+            tilt_fail = ~(tilt <= cup.approach_tolerance)
+            leak_fail = ~(leak <= self.leak_threshold)
+            stretch_fail = ~(perimeter <= cup.stretch_limit)
+            max_stretch = np.maximum(perimeter, np.maximum(flexion, cone))
+        else:
+            perimeter, d_per = self._chord_stage(points, frames, idx, d_vert, ring_off, hole)
+            rim = d_vert
+            tilt = np.full(count, np.nan)
+            leak = np.zeros(count)
+            vacuum = full_vacuum
+            tilt_fail = leak_fail = np.zeros(count, dtype=bool)
+            max_stretch = np.maximum(perimeter, np.maximum(flexion, cone))
+            stretch_fail = ~(max_stretch <= cup.stretch_limit)
         perimeter[ring_off] = np.inf
-        max_stretch = np.maximum(perimeter, np.maximum(flexion, cone))
         max_stretch[ring_off] = np.inf
-        stretch_fail = ~(max_stretch <= cup.stretch_limit)
         if staged:
-            alive &= ~ring_off & ~hole & ~stretch_fail
+            alive &= ~ring_off & ~hole & ~stretch_fail & ~tilt_fail & ~leak_fail
+            if self.lip:  # now with the vacuum the seal holds
+                idx = np.flatnonzero(alive)
+                alive[idx] = gate(idx, ring_centre[idx], vacuum[idx])
 
         # Stage C: probes inside the ring for holes and cone-face collisions.
         idx = np.flatnonzero(alive) if staged else np.arange(count)
@@ -223,10 +341,10 @@ class SealModel:
             k = self.edge_index[self.probe_perimeter]
             face = (
                 (1.0 - f) * apex[idx, None]
-                + f * (1.0 - s) * d_vert[idx][:, k]
-                + f * s * d_vert[idx][:, (k + 1) % n]
+                + f * (1.0 - s) * rim[idx][:, k]
+                + f * s * rim[idx][:, (k + 1) % n]
             )
-            collision[idx] = (np.isfinite(d_in) & (d_in < face - tol)).any(axis=1)
+            collision[idx] = (np.isfinite(d_in) & (d_in < face - self.config.collision_tolerance)).any(axis=1)
             if not staged:
                 probed = np.concatenate([d_per[idx], d_in], axis=1) - d_axis[idx, None]
                 planarity[idx] = np.sqrt(np.mean(probed**2, axis=1))
@@ -235,8 +353,8 @@ class SealModel:
             return alive & ~hole & ~collision
 
         failure = np.zeros(count, dtype=np.int8)
-        for code, flag in ((STRETCH, stretch_fail), (CONE_COLLISION, collision), (HOLE, hole),
-                           (RING_OFF_SURFACE, ring_off)):
+        for code, flag in ((STRETCH, stretch_fail), (TILT, tilt_fail), (LEAK, leak_fail),
+                           (CONE_COLLISION, collision), (HOLE, hole), (RING_OFF_SURFACE, ring_off)):
             failure[flag] = code
         surface = np.where(np.isfinite(d_axis)[:, None], points + d_axis[:, None] * approach, np.nan)
         planarity[~np.isfinite(planarity)] = np.inf
@@ -253,4 +371,52 @@ class SealModel:
             ring_centre=ring_centre,
             surface_point=surface,
             planarity_rms=planarity,
+            tilt=tilt,
+            leak_area=leak,
+            vacuum_force=vacuum,
         )
+
+    def _chord_stage(self, points, frames, idx, d_vert, ring_off, hole):
+        """The paper's perimeter springs: each spring's path on the surface through its chord's
+        edge samples. Updates ring_off / hole in place; returns (stretch, depths of all points)."""
+        count, n = len(points), self.cup.n_vertices
+        perimeter = np.full(count, np.inf)
+        d_per = np.full((count, len(self.perimeter_xy)), np.inf)
+        if len(idx):
+            edge_xy = self.perimeter_xy[self.edge_only]
+            d_edge, back_edge = self._depths(points[idx], frames[idx], edge_xy)
+            d_per[np.ix_(idx, np.flatnonzero(self.edge_only))] = d_edge
+            d_per[np.ix_(idx, np.flatnonzero(~self.edge_only))] = d_vert[idx]
+            ring_off[idx] |= ~np.isfinite(d_edge).all(axis=1)
+            hole[idx] |= back_edge.any(axis=1)
+            rise = np.diff(np.concatenate([d_per[idx], d_per[idx, :1]], axis=1), axis=1)
+            length = np.sqrt(self.segment_xy**2 + rise**2).reshape(len(idx), n, -1).sum(axis=2)
+            perimeter[idx] = np.abs(length / self.perimeter_rest - 1.0).max(axis=1)
+        return perimeter, d_per
+
+    def _lip_stage(self, points, frames, idx, d_vert, ring_off, hole):
+        """The lip circle: cast its non-vertex places, then `lip_profile` where all of it landed.
+        Updates ring_off / hole in place; returns (lip stretch, depths, tilt, leak area, vacuum
+        force, resting depth of the lip at the n vertex bearings), inf / NaN / inf / 0 / inf where
+        the lip is not (all) on the surface."""
+        count = len(points)
+        stretch = np.full(count, np.inf)
+        tilt = np.full(count, np.nan)
+        leak = np.full(count, np.inf)
+        d_lip = np.full((count, len(self.lip_xy)), np.inf)
+        resting = np.full((count, self.cup.n_vertices), np.inf)
+        if len(idx):
+            d_new, back_new = self._depths(points[idx], frames[idx], self.lip_xy[~self.lip_vertex])
+            d_lip[np.ix_(idx, np.flatnonzero(~self.lip_vertex))] = d_new
+            d_lip[np.ix_(idx, np.flatnonzero(self.lip_vertex))] = d_vert[idx]
+            ring_off[idx] |= ~np.isfinite(d_new).all(axis=1)
+            hole[idx] |= back_new.any(axis=1)
+            on = idx[np.isfinite(d_lip[idx]).all(axis=1)]
+            if len(on):
+                lip = self.lip_profile(d_lip[on])
+                stretch[on], tilt[on], leak[on] = lip["stretch"], lip["tilt"], lip["leak"]
+                resting[on] = lip["resting"][:, self.lip_vertex]
+        measured = np.isfinite(leak)
+        vacuum = np.zeros(count)
+        vacuum[measured] = vacuum_force(leak[measured], self.cup)
+        return stretch, d_lip, tilt, leak, vacuum, resting

@@ -1,0 +1,281 @@
+"""Physical facts the analytic labeller must reproduce with the default (physical) cup.
+
+Each test derives its expectation from the cup's numbers (suctionbench.config.CupConfig) and the
+physics in its comment, never from the simulation. Default cup: lip radius r = 7.5 mm, effective
+radius 6.5 mm, 60 kPa ejector -> V = 60 kPa x pi (6.5 mm)^2 = 7.96 N, lip travel 2 mm, bellows
+stroke 6 mm, seal gap 0.3 mm, leak threshold ~1.0 mm^2 (the leak at which the ejector's vacuum
+falls to its 50 % switch point).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import trimesh
+from conftest import box, difference
+
+from suctionbench.config import (
+    CUP_DEFAULT,
+    STANDARD_GRAVITY,
+    LabelConfig,
+    PerturbationConfig,
+)
+from suctionbench.contact import SuctionLabeller
+from suctionbench.contact.robust import sample_perturbations
+from suctionbench.vacuum import equilibrium_vacuum
+
+CUP = CUP_DEFAULT
+DOWN = np.array([[0.0, 0.0, -1.0]])
+G = STANDARD_GRAVITY
+NO_NOISE = PerturbationConfig(
+    num_samples=1, grasp_point_std=0.0, approach_rotation_std=0.0, object_translation_std=0.0,
+    object_rotation_std=0.0, com_std=0.0, friction_std=0.0, force_noise_std=0.0,
+)
+"""The robust path with every perturbation switched off: one sample, the nominal grasp."""
+
+
+def tilted(deg: float, azimuth_deg: float = 0.0) -> np.ndarray:
+    """Approach tilted by `deg` from straight down, toward the azimuth `azimuth_deg` in the xy plane."""
+    t, a = math.radians(deg), math.radians(azimuth_deg)
+    return np.array([math.sin(t) * math.cos(a), math.sin(t) * math.sin(a), -math.cos(t)])
+
+
+def grooved_box(angle_deg: float, offset: float, width: float = 0.002, depth: float = 0.004) -> trimesh.Trimesh:
+    """A 12 x 8 x 4 cm box whose top face (z = 2 cm) has a straight groove `width` wide and `depth`
+    deep running right across it, at `angle_deg` from the y axis and `offset` from the centre."""
+    cut = box((width, 0.3, 2 * depth), center=(offset, 0.0, 0.02))
+    cut.apply_transform(trimesh.transformations.rotation_matrix(math.radians(angle_deg), [0, 0, 1]))
+    return difference(box((0.12, 0.08, 0.04)), cut)
+
+
+def lying_cylinder(radius: float) -> trimesh.Trimesh:
+    """A 10 cm long cylinder lying along x (axis through the origin), finely tessellated."""
+    mesh = trimesh.creation.cylinder(radius=radius, height=0.10, sections=256)
+    mesh.apply_transform(trimesh.transformations.rotation_matrix(math.pi / 2, [0, 1, 0]))
+    return mesh
+
+
+def test_vacuum_force_is_pressure_times_effective_area():
+    # Vendors rate holding force over the effective diameter, the mean of the lip's inner and
+    # outer diameter: V = p (pi ((r + r_i) / 2)^2) = 60 kPa x pi (6.5 mm)^2 = 7.96 N, not the
+    # outer area's pi r^2 (10.6 N); with no leak the ejector holds its full vacuum.
+    v = 60e3 * math.pi * 0.0065**2
+    assert CUP.vacuum_force == pytest.approx(v, rel=1e-12)
+    assert v == pytest.approx(7.964, abs=1e-3)
+    assert float(equilibrium_vacuum(0.0, CUP)) == pytest.approx(CUP.vacuum_pressure, rel=1e-12)
+
+
+def test_flat_face_seals_and_holds_its_weight_up_to_the_payload():
+    # A flat face under the cup: the lip lands at one depth, no tilt, no gap, no leak: a seal at
+    # full vacuum. The COM straight below the centred grasp leaves only the axial pull m g: it is
+    # resisted iff m g <= V, i.e. m <= V / g = 0.81 kg (no torque, no tangential force), and the
+    # robust label of a light object there is close to 1.
+    mesh = box((0.12, 0.08, 0.04))
+    payload = CUP.vacuum_force / G
+    assert payload == pytest.approx(0.812, abs=1e-3)
+    seal = SuctionLabeller(mesh, mass=0.2).seal([[0, 0, 0.02]], DOWN)
+    assert seal.seal[0] and seal.leak_area[0] == 0.0
+    assert seal.vacuum_force[0] == pytest.approx(CUP.vacuum_force, rel=1e-12)
+    for mass, holds in ((0.2, True), (0.98 * payload, True), (1.02 * payload, False)):
+        assert SuctionLabeller(mesh, mass=mass).wrench_resistance([[0, 0, 0.02]], DOWN)[0] == holds, mass
+    rwr, _ = SuctionLabeller(mesh, mass=0.2).robust(np.array([[0, 0, 0.02]]), DOWN, seed=1)
+    assert rwr[0] >= 0.9
+
+
+@pytest.mark.parametrize("angle", [0.0, 25.0, 45.0, 70.0, 90.0])
+def test_groove_across_the_face_under_the_cup_leaks(angle):
+    # A 2 mm wide, 4 mm deep groove straight across the face, crossing the lip circle twice. The
+    # lip bends no tighter than the smallest cylinder it seals (radius r^2 / (2 lip_travel) =
+    # 14.1 mm), so it sinks only 1^2 / (2 x 14.1) mm = 0.04 mm into a 2 mm groove: it spans the
+    # groove, which stays open beneath it. Each crossing covers >= 2 mm of the lip (more when the
+    # groove runs obliquely to the lip), so the leak is >= 2 x 2 mm x (4 - 0.3) mm = 14.8 mm^2,
+    # 15 times the ~1 mm^2 at which the ejector's vacuum falls to its switch point (at 14.8 mm^2
+    # it holds under 1 kPa): no seal, whichever way the groove runs and wherever it crosses the
+    # disc (offsets up to 5 mm from the cup's centre, different ring phases).
+    threshold = CUP.leak_threshold_area
+    assert threshold == pytest.approx(1.0e-6, rel=0.1)
+    assert float(equilibrium_vacuum(14.8e-6, CUP)) < 1e3
+    for offset in (0.0, 0.0025, -0.005):
+        labeller = SuctionLabeller(grooved_box(angle, offset), mass=0.1)
+        # targets along the groove's normal so the groove stays inside the lip circle
+        normal = np.array([math.cos(math.radians(angle)), math.sin(math.radians(angle)), 0.0])
+        along = np.array([-normal[1], normal[0], 0.0])
+        points = np.array([offset * normal + s * along + [0, 0, 0.02] for s in (-0.01, 0.0, 0.004, 0.013)])
+        approaches = np.repeat(DOWN, len(points), axis=0)
+        seal = labeller.seal(points, approaches)
+        assert seal.failure_names == ["leak"] * len(points), (angle, offset, seal.failure_names)
+        assert (seal.leak_area >= 14e-6).all(), seal.leak_area
+        assert (seal.vacuum_force < 0.02 * CUP.vacuum_force).all()
+        assert not labeller.wrench_resistance(points, approaches).any()
+        rwr, _ = labeller.robust(points, approaches, seed=2)
+        assert (rwr == 0.0).all()
+    # The same box, grasped 15 mm beside the groove (entirely off the disc), seals.
+    labeller = SuctionLabeller(grooved_box(angle, 0.0), mass=0.1)
+    beside = 0.015 * np.array([math.cos(math.radians(angle)), math.sin(math.radians(angle)), 0.0]) + [0, 0, 0.02]
+    assert labeller.seal(beside[None], DOWN).seal[0]
+
+
+def test_shallow_scratch_does_not_leak_but_a_deeper_one_does():
+    # Only gap beyond seal_gap (0.3 mm) leaks: a 2 mm wide scratch 0.25 mm deep leaves no leak at
+    # all. At 0.6 mm deep each crossing leaks ~2 mm x 0.3 mm = 0.6 mm^2, ~1.2 mm^2 for the two:
+    # just past the threshold (~1.0 mm^2), so the vacuum falls below the switch point.
+    shallow = SuctionLabeller(grooved_box(30.0, 0.0, depth=0.00025)).seal([[0, 0, 0.02]], DOWN)
+    assert shallow.seal[0] and shallow.leak_area[0] == 0.0
+    deeper = SuctionLabeller(grooved_box(0.0, 0.0, depth=0.0006)).seal([[0, 0, 0.02]], DOWN)
+    assert deeper.failure_names == ["leak"]
+    assert deeper.leak_area[0] == pytest.approx(2 * 0.002 * 0.0003, rel=0.3)
+
+
+def test_smallest_sealable_lying_cylinder_is_near_the_lip_travel_limit():
+    # A cylinder of radius R lying on its side, grasped on top: the lip circle lands on it with
+    # depth z(theta) = R - sqrt(R^2 - r^2 sin^2 theta), a pure second harmonic that no tilt of the
+    # bellows removes, spanning the sag delta = R - sqrt(R^2 - r^2) (~r^2 / 2R). The lip folds
+    # lip_travel, its edge closes seal_gap more: no gap at all while delta <= 2.3 mm, i.e.
+    # R >= (r^2 + 2.3^2) / (2 x 2.3) mm = 13.4 mm; below that the gap near theta = +-90 deg grows
+    # and the leak passes ~1 mm^2 near R = 12.5 mm (at R = 12 mm: 0.33 mm excess over +-20 deg of
+    # lip on each side, ~2.3 mm^2). The geometric limit r^2 / (2 lip_travel) = 14.1 mm (exact
+    # sag: 15.1 mm): the labeller's smallest sealable radius must lie within 2.5 mm of it.
+    r, t, s = CUP.radius, CUP.lip_travel, CUP.seal_gap
+    assert CUP.min_seal_radius == pytest.approx(0.0141, abs=1e-4)
+    no_gap = (r**2 + (t + s) ** 2) / (2 * (t + s))
+    assert no_gap == pytest.approx(0.0134, abs=1e-4)
+    radii = np.round(np.arange(0.0100, 0.0200, 0.0005), 4)
+    sealed = {}
+    for radius in radii:
+        labeller = SuctionLabeller(lying_cylinder(radius), mass=0.05)
+        points = np.array([[0.0, 0.0, radius], [0.012, 0.0, radius]])  # two ring phases
+        result = labeller.seal(points, np.repeat(DOWN, 2, axis=0))
+        assert result.seal[0] == result.seal[1], radius
+        sealed[radius] = bool(result.seal[0])
+        if not result.seal[0]:
+            assert result.failure_names[0] == "leak", (radius, result.failure_names)
+    smallest = min(R for R, ok in sealed.items() if ok)
+    print(f"smallest sealable lying cylinder: R = {smallest * 1e3:.1f} mm (r^2 / 2 lip_travel = 14.1 mm)")
+    assert all(ok for R, ok in sealed.items() if smallest <= R)  # monotone: every larger one seals
+    assert all(ok for R, ok in sealed.items() if no_gap <= R)
+    assert not sealed[0.012]
+    assert abs(smallest - CUP.min_seal_radius) <= 0.0025
+
+
+@pytest.mark.parametrize("azimuth", [0.0, 90.0, 135.0])
+def test_flat_face_seals_up_to_the_approach_tolerance(azimuth):
+    # Approach tilted by phi from the normal of a flat face: the lip profile is the tilted plane
+    # d(theta) = r tan(phi) cos(theta - theta0), all first harmonic, so the bellows plane takes it
+    # up entirely (no gap, no leak) as long as the bellows can tilt that far: one side uses its
+    # whole stroke while the other is uncompressed, 2 r tan(phi) <= stroke, phi <= atan(6 / 15) =
+    # 21.8 deg = cup.approach_tolerance. The labeller must seal every tilt up to 1 deg below it
+    # and none from 1 deg above it, in any tilt direction.
+    tolerance = math.degrees(CUP.approach_tolerance)
+    assert tolerance == pytest.approx(21.8, abs=0.05)
+    angles = np.arange(0.0, 30.01, 0.25)
+    labeller = SuctionLabeller(box((0.2, 0.2, 0.04)), mass=0.1)
+    points = np.tile([0.0, 0.0, 0.02], (len(angles), 1))
+    result = labeller.seal(points, np.array([tilted(a, azimuth) for a in angles]))
+    largest = angles[result.seal].max()
+    print(f"largest sealed tilt at azimuth {azimuth}: {largest:.2f} deg (tolerance {tolerance:.2f})")
+    assert result.seal[angles <= tolerance - 1.0].all()
+    assert not result.seal[angles >= tolerance + 1.0].any()
+    assert set(np.array(result.failure_names, dtype=object)[~result.seal]) == {"tilt"}
+    assert (result.leak_area[result.seal] == 0.0).all()
+    np.testing.assert_allclose(np.degrees(result.tilt), angles, atol=0.1)
+
+
+BAR_MASS = 0.2
+
+
+def bar_limit_offset(mass: float) -> float:
+    """Offset d* (m) at which m g d reaches the ring limit r (V - m g) / 2."""
+    return CUP.radius * (CUP.vacuum_force - mass * G) / (2.0 * mass * G)
+
+
+def test_bar_gripped_off_centre_drops_at_the_ring_peel_limit():
+    # A 0.2 kg bar (20 x 3 x 2 cm) gripped on its top face at an offset d from its centre of mass
+    # along its length. About the contact the weight is a pull m g along the approach (f_z = -m g)
+    # plus a tilting torque m g d (the COM's 1 cm depth below the face adds none: the force is
+    # vertical). The ring pressure p(theta) = p0 + p_x cos + p_y sin must stay >= 0 round the lip:
+    # ||tau|| = pi r sqrt(p_x^2 + p_y^2) <= pi r p0 = r (V + f_z) / 2 = r (V - m g) / 2 =
+    # 7.5 mm x (7.96 - 1.96) N / 2 = 22.5 mN m, so the bar is held iff d <= d* = 11.5 mm.
+    # Friction and torsion are idle (no tangential force). Checked on the nominal wrench path, on
+    # the robust path with every perturbation off, and on the cone-program reference.
+    d_star = bar_limit_offset(BAR_MASS)
+    assert CUP.radius * (CUP.vacuum_force - BAR_MASS * G) / 2 == pytest.approx(0.0225, abs=1e-4)
+    assert d_star == pytest.approx(0.0115, abs=1e-4)
+    mesh = box((0.20, 0.03, 0.02))
+    factors = np.array([0.0, 0.5, 0.9, 0.98, 1.02, 1.1, 2.0, 4.0])
+    points = np.stack([factors * d_star, np.zeros_like(factors), np.full_like(factors, 0.01)], axis=1)
+    approaches = np.repeat(DOWN, len(factors), axis=0)
+    expected = factors <= 1.0
+    labeller = SuctionLabeller(mesh, mass=BAR_MASS)
+    assert labeller.seal(points, approaches).seal.all()
+    np.testing.assert_array_equal(labeller.wrench_resistance(points, approaches), expected)
+    exact = SuctionLabeller(mesh, LabelConfig(perturbation=NO_NOISE), mass=BAR_MASS)
+    rwr, _ = exact.robust(points, approaches, seed=0)
+    np.testing.assert_array_equal(rwr == 1.0, expected)
+    ref, _ = exact.robust(points, approaches, seed=0, reference=True)
+    np.testing.assert_array_equal(ref, rwr)
+
+
+def test_inertial_load_of_the_lift_and_the_transport():
+    # With the episode's peak acceleration a = 3.1 m/s^2 the object must also survive the lift
+    # (it hangs with m (g + a)) and the transport (a horizontal d'Alembert force m a at the COM).
+    # (1) A centred top grasp on a flat box of 0.7 kg: m g = 6.86 N < V = 7.96 N holds, but
+    #     m (g + a) = 9.04 N > V: the lift pulls it off.
+    # (2) A centred top grasp on a tall 0.3 kg box whose COM is 5 cm below the face: statically
+    #     no torque; in transport m a x 5 cm = 46.5 mN m, beyond the ring limit
+    #     r (V - m g) / 2 = 18.8 mN m (more than twice it), in every horizontal direction: every
+    #     sample drops.
+    episode = LabelConfig.for_episode(CUP)
+    assert episode.perturbation.inertial_acceleration == CUP.peak_acceleration == 3.1
+    flat = box((0.12, 0.08, 0.04))
+    assert 0.7 * G < CUP.vacuum_force < 0.7 * (G + 3.1)
+    assert SuctionLabeller(flat, mass=0.7).wrench_resistance([[0, 0, 0.02]], DOWN)[0]
+    assert not SuctionLabeller(flat, episode, mass=0.7).wrench_resistance([[0, 0, 0.02]], DOWN)[0]
+    tall = box((0.06, 0.06, 0.10))
+    assert 2 * CUP.radius * (CUP.vacuum_force - 0.3 * G) / 2 < 0.3 * 3.1 * 0.05
+    top = np.array([[0.0, 0.0, 0.05]])
+    static = SuctionLabeller(tall, mass=0.3)
+    moving = SuctionLabeller(tall, episode, mass=0.3)
+    assert static.wrench_resistance(top, DOWN)[0] and not moving.wrench_resistance(top, DOWN)[0]
+    assert static.robust(top, DOWN, seed=4)[0][0] > 0.5  # (0.1 rad object noise x 5 cm lever bites)
+    assert moving.robust(top, DOWN, seed=4)[0][0] == 0.0
+
+
+def test_inertial_load_keeps_the_papers_draws_and_batch_independence():
+    # The transport azimuths are drawn after the paper's 19 draws from each grasp's keyed
+    # stream: switching the inertial load on changes no perturbed grasp, COM, force or friction,
+    # and a grasp's label still depends only on (seed, grasp id).
+    mesh = box((0.10, 0.06, 0.04))
+    rng = np.random.default_rng(0)
+    points = np.column_stack([rng.uniform(-0.03, 0.03, 12), rng.uniform(-0.02, 0.02, 12), np.full(12, 0.02)])
+    approaches = np.repeat(DOWN, 12, axis=0)
+    quiet = SuctionLabeller(mesh, mass=0.3)
+    loud = SuctionLabeller(mesh, LabelConfig.for_episode(CUP), mass=0.3)
+    frames = quiet.frames(points, approaches)
+    a = sample_perturbations(points, frames, quiet.object, CUP, quiet.config.perturbation, seed=7)
+    b = sample_perturbations(points, frames, loud.object, CUP, loud.config.perturbation, seed=7)
+    for name in ("points", "frames", "com", "force", "friction"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert a.loads.shape[1] == 1 and b.loads.shape[1] == 2
+    # lift case: the weight grows by m a along gravity
+    lift = b.inertial[:, 0]
+    np.testing.assert_allclose(np.linalg.norm(lift, axis=1), 0.3 * 3.1, rtol=1e-12)
+    full, _ = loud.robust(points, approaches, seed=7)
+    part, _ = loud.robust(points[5:8], approaches[5:8], seed=7, grasp_ids=np.arange(5, 8))
+    np.testing.assert_array_equal(full[5:8], part)
+    assert (full <= quiet.robust(points, approaches, seed=7)[0]).all()  # more load, never more hold
+
+
+def test_inertial_reference_path_agrees_with_the_fast_path():
+    # The per-sample reference (full seal, one cone program per load case) against the staged,
+    # vectorised path on the same perturbed samples, with the inertial load on.
+    mesh = box((0.10, 0.06, 0.04))
+    config = LabelConfig(perturbation=PerturbationConfig.for_episode(CUP, num_samples=10))
+    labeller = SuctionLabeller(mesh, config, mass=0.25)
+    points = np.array([[0.0, 0.0, 0.02], [0.01, 0.005, 0.02], [0.03, 0.0, 0.02], [0.048, 0.0, 0.02]])
+    approaches = np.vstack([DOWN, [tilted(15.0)], DOWN, DOWN])
+    fast, fast_samples = labeller.robust(points, approaches, seed=3)
+    ref, ref_samples = labeller.robust(points, approaches, seed=3, reference=True)
+    np.testing.assert_array_equal(fast_samples, ref_samples)
+    assert fast_samples.any() and not fast_samples.all()

@@ -39,6 +39,9 @@ def grasp_record(labels: GraspLabels, i: int) -> dict[str, Any]:
         "cone_collision": bool(seal.cone_collision[i]),
         "hole": bool(seal.hole[i]),
         "ring_off_surface": bool(seal.ring_off_surface[i]),
+        "tilt_deg": _num(np.degrees(seal.tilt[i])),
+        "leak_area_mm2": _num(1e6 * seal.leak_area[i]),
+        "vacuum_force": _num(seal.vacuum_force[i]),
         "contact_point": [_num(c) for c in seal.surface_point[i]],
         "wr": bool(labels.wr[i]),
     }
@@ -77,6 +80,8 @@ def save_labels(path: str | Path, labels: GraspLabels) -> None:
         "seal_failure": seal.failure,
         "seal_failure_names": np.array(FAILURES),
         "max_stretch": seal.max_stretch,
+        "leak_area": seal.leak_area,
+        "vacuum_force": seal.vacuum_force,
         "contact_points": seal.surface_point,
         "com": labels.com,
         "config_json": np.array(json.dumps(to_dict(labels.config))),

@@ -61,6 +61,8 @@ def bench_label(
         "faces": len(info.mesh.faces),
         "cores": used_cores,
         "samples_per_grasp": samples,
+        "seal_model": config.cup.seal_model,
+        "lip_samples": config.seal.lip_samples,
     }
     # Mix 1: uniform surface candidates (what dataset generation labels). Mix 2: only grasps that
     # hold nominally, so most samples pass every stage and cast every ray: the slow case.

@@ -14,7 +14,9 @@ through the target p; "depth" is the distance along v beyond that plane. Both sh
   constraint v.(a - p) <= 0 fixes the sign used here). The surface inside the footprint must
   nowhere rise above the triangular faces (a, v_i, v_i+1) (`cone_collision`: the cup would have
   to pass through it), and no ray inside the ring may pass through a gap in the surface (`hole`:
-  a miss or a hit on a back face);
+  a miss or a hit on a back face). In the lip model the body stands where the lip rests (item 3
+  below), not where a vertex ray fell: a vertex over a groove the lip spans does not drag the cone
+  face into the groove's edge;
 - the springs of the paper (perimeter v_i v_i+1, flexion v_i v_i+2, cone v_i a) and their
   stretches, reported for the spring-stretch metric.
 

@@ -29,7 +29,9 @@ class GraspLabels:
     """Nominal seal-model outcome."""
 
     wr: np.ndarray
-    """(N,) nominal wrench resistance (seal and resist gravity, no perturbation)."""
+    """(N,) nominal wrench resistance (seal, and resist the weight - plus the lift and transport
+    loads when the perturbation model has an inertial load - with the vacuum the seal holds; no
+    perturbation)."""
 
     rwr: np.ndarray | None
     """(N,) robust wrench resistance, the fraction of J perturbed samples that seal and resist."""
@@ -68,7 +70,7 @@ def spring_stretch(labels: GraspLabels) -> np.ndarray:
 
 
 def wrench_resistance(labels: GraspLabels) -> np.ndarray:
-    """WR: 1 if the nominal grasp seals and resists gravity, else 0."""
+    """WR: 1 if the nominal grasp seals and resists its load (see GraspLabels.wr), else 0."""
     return labels.wr.astype(float)
 
 

@@ -33,7 +33,9 @@ where the longest cone spring reaches the limit (13.9 deg for the 15 mm cup).
    spring forces (the paper's p(theta) = k delta(theta)) have no net moment about the axis, i.e.
    where the lip's fold delta(theta) has no first harmonic: the end plane is the least-squares
    first-harmonic fit P(theta) = c0 + a cos(theta) + b sin(theta) of the profile the lip rests
-   on. The bellows can tilt until one side has used its whole stroke while the other is
+   on (fitted to the measured profile, then refitted after item 2's bridging, which works
+   relative to the end plane: the lip bends relative to the bellows, not to the cup axis).
+   The bellows can tilt until one side has used its whole stroke while the other is
    uncompressed: sqrt(a^2 + b^2) <= stroke / 2, i.e. a tilt of at most
    atan(stroke / (2 r)) = cup.approach_tolerance (21.8 deg); beyond it, `tilt`.
 2. *The lip bends, but only so tightly.* A lip point folds independently of its neighbours up to
@@ -47,7 +49,10 @@ where the longest cone spring reaches the limit (13.9 deg for the 15 mm cup).
    (parabolic in the small-slope approximation, s^2 / (2 R_min)): a 2 mm groove lets the lip in
    by only 1^2 / (2 x 14.1) = 0.04 mm, so the lip spans it and the groove stays open beneath.
    The window of the closing is +-r of arc: further away the rolled disc has risen by
-   r^2 / (2 R_min) = lip_travel, more than the lip can fold anyway (item 3 covers that).
+   r^2 / (2 R_min) = lip_travel, more than the lip can fold anyway (item 3 covers that). Each
+   place stands for its cell of lip, +-half the spacing: the disc rests on the cells' edges, not
+   only on the places (else a groove would look up to two spacings wider than it is and the disc
+   would sink up to 0.14 mm into a 2 mm groove instead of 0.04 mm).
 3. *The lip folds at most lip_travel.* The vacuum pulls the cup on until the lip is folded flat
    where the bridged profile comes nearest the cup (relative to the bellows plane P); from there
    the lip reaches lip_travel further. Where the bridged profile lies deeper, a gap remains.
@@ -204,6 +209,9 @@ class SealModel:
         reach = int(r / self.lip_arc)  # the closing's window: +-r of arc (module doc, item 2)
         self.bend_offsets = np.arange(-reach, reach + 1)
         self.bend_rise = (self.bend_offsets * self.lip_arc) ** 2 / (2.0 * cup.min_seal_radius)
+        # each place stands for its cell of lip (+-half the spacing): the disc rests on the cells
+        cell_gap = np.maximum(np.abs(self.bend_offsets) * self.lip_arc - 0.5 * self.lip_arc, 0.0)
+        self.bend_rise_cell = cell_gap**2 / (2.0 * cup.min_seal_radius)
         self.leak_threshold = cup.leak_threshold_area
 
     # -- ray casting -------------------------------------------------------------------------
@@ -235,17 +243,22 @@ class SealModel:
         """The lip on a measured profile `depth` (S, K) (finite, the lip circle's K places):
         module doc, items 1-4. Returns the bridged profile, where the lip rests, the gap under each
         place, the leak area, the bellows plane's tilt and the lip's own perimeter stretch."""
-        height = -depth  # toward the cup; the rolled disc comes from above
+        # The lip bends relative to the bellows' end, so the end's plane comes off first: fit it
+        # to the raw profile, close the rest, and refit what the closing changed (a groove pulls
+        # the first fit, the bridged profile no longer has it).
+        coef = depth @ self.lip_fit
+        relative = depth - coef @ self.lip_basis.T
+        height = -relative  # toward the cup; the rolled disc comes from above
         rest = np.full_like(height, -np.inf)
-        for o, rise in zip(self.bend_offsets, self.bend_rise, strict=True):
+        for o, rise in zip(self.bend_offsets, self.bend_rise_cell, strict=True):
             np.maximum(rest, np.roll(height, -o, axis=1) - rise, out=rest)  # lowest resting disc at y
         lip = np.full_like(height, np.inf)
         for o, rise in zip(self.bend_offsets, self.bend_rise, strict=True):
             np.minimum(lip, np.roll(rest, -o, axis=1) + rise, out=lip)  # envelope of the discs
-        bridged = -lip
-        coef = bridged @ self.lip_fit
-        plane = coef @ self.lip_basis.T
-        e = bridged - plane
+        correction = -lip @ self.lip_fit
+        coef = coef + correction
+        e = -lip - correction @ self.lip_basis.T  # the bridged profile relative to the end plane
+        bridged = depth - (relative + lip)  # the same, in depth along v
         floor = e.min(axis=1, keepdims=True)
         beyond = np.maximum(e - floor - self.cup.lip_travel, 0.0)
         gap = (depth - bridged) + beyond

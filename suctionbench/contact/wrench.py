@@ -61,9 +61,10 @@ resisted despite rounding."""
 QP_RESIDUAL_TOL = 1e-9
 """The reference declares a wrench resisted when it finds an alpha *in F* whose residual
 ||D (G alpha + w)|| is at most QP_RESIDUAL_TOL + QP_RELATIVE_TOL ||D w||. D expresses the residual
-in units of the tilt limit at zero load tau_s (r V / 2 for the ring, min(pi r kappa, r V) for the
-paper's box): torques divided by tau_s, forces multiplied by r / tau_s (a force as the torque it
-exerts at the cup radius). Weighting forces less would make the residual useless: in the object
+in units of the tilt limit at zero load and full vacuum tau_s (r V / 2 for the ring,
+min(pi r kappa, r V) for the paper's box, V = cup.vacuum_force whatever the seal holds): torques
+divided by tau_s, forces multiplied by r / tau_s (a force as the torque it exerts at the cup
+radius). Weighting forces less would make the residual useless: in the object
 frame a tiny change of contact force at a lever |o| supplies any missing torque, so with forces
 weighted by 1/V a wrench 1e-3 outside F has a true minimum residual ~1e-9 (paper preset). With D,
 that residual is ~1e-3 r / |o|. After polishing (`_polish`) a resisted wrench leaves only rounding
@@ -194,8 +195,8 @@ def resists_qp(
     """
     v = cup.vacuum_force if vacuum_force is None else float(vacuum_force)
     w = np.concatenate([force, np.cross(com, force)])
-    r = cup.radius
-    torque_scale = 0.5 * r * v if cup.kappa is None else min(math.pi * r * cup.kappa, r * v)
+    r, v_full = cup.radius, cup.vacuum_force  # the scale D uses the full vacuum: well defined at V = 0
+    torque_scale = 0.5 * r * v_full if cup.kappa is None else min(math.pi * r * cup.kappa, r * v_full)
     scale = np.array([cup.radius / torque_scale] * 3 + [1.0 / torque_scale] * 3)
     m = scale[:, None] * grasp_map(ring_centre, frame)
     c = scale * w
@@ -219,13 +220,13 @@ def resists_qp(
     if ring:
         cuts: list[np.ndarray] = []
         for _ in range(CONE_CUTS):
-            cuts.append(_cone_cut(alpha, cup.radius))
+            cuts.append(_cone_cut(alpha, r))
             a_cut = np.vstack([a_lin, *cuts])
-            b_cut = np.concatenate([b_lin, np.full(len(cuts), 0.5 * cup.radius * v)])
+            b_cut = np.concatenate([b_lin, np.full(len(cuts), 0.5 * r * v)])
             alpha = _polish(m, c, a_cut, b_cut, alpha)
-            if _cone_excess(alpha, cup.radius, v) <= 1e-12:
+            if _cone_excess(alpha, r, v, v_full) <= 1e-12:
                 break
-        alpha = _onto_cone(alpha, cup.radius, v)
+        alpha = _onto_cone(alpha, r, v)
     else:
         alpha = _polish(m, c, a_lin, b_lin, alpha)
     residual = float(np.linalg.norm(m @ alpha + c))
@@ -241,9 +242,10 @@ def _cone_cut(alpha: np.ndarray, r: float) -> np.ndarray:
     return np.array([0.0, 0.0, -0.5 * r, u[0], u[1], 0.0])
 
 
-def _cone_excess(alpha: np.ndarray, r: float, v: float) -> float:
-    """How far alpha's tilting torque exceeds the ring limit, relative to the limit at zero load."""
-    return (float(np.hypot(alpha[3], alpha[4])) - 0.5 * r * (alpha[2] + v)) / (0.5 * r * v)
+def _cone_excess(alpha: np.ndarray, r: float, v: float, v_full: float) -> float:
+    """How far alpha's tilting torque exceeds the ring limit (vacuum v), relative to the limit at
+    zero load and full vacuum v_full."""
+    return (float(np.hypot(alpha[3], alpha[4])) - 0.5 * r * (alpha[2] + v)) / (0.5 * r * v_full)
 
 
 def _onto_cone(alpha: np.ndarray, r: float, v: float) -> np.ndarray:

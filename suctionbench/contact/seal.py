@@ -29,7 +29,7 @@ where the longest cone spring reaches the limit (13.9 deg for the 15 mm cup).
 **Lip** (the physical cup, default). The lip is measured at K >= 32 places on its circle
 (`lip_samples`, 0.98 mm apart by default), depths d_k. Four pieces of physics decide the seal:
 
-1. *The bellows tilts and compresses.* The bellows' end carries the lip and settles where the lip's
+1. *The bellows tilts.* The bellows' end carries the lip and settles where the lip's
    spring forces (the paper's p(theta) = k delta(theta)) have no net moment about the axis, i.e.
    where the lip's fold delta(theta) has no first harmonic: the end plane is the least-squares
    first-harmonic fit P(theta) = c0 + a cos(theta) + b sin(theta) of the profile the lip rests
@@ -73,7 +73,9 @@ at one depth and stretches nothing.
 
 Cylinders lying on their side therefore seal down to ~R_min (slightly below: the first seal_gap
 of excess and a small leak are tolerated, 12.5-13 mm for the default cup), a flat face seals up to
-the approach tolerance, and a groove crossing the lip leaks.
+the approach tolerance, and a groove crossing the lip leaks. Not modelled: the bellows' axial
+stroke beyond its tilt (a profile's mean depth is free), and any limit on small spheres other
+than the lip landing on them.
 """
 
 from __future__ import annotations

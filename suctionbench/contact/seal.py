@@ -251,12 +251,15 @@ class SealModel:
         coef = depth @ self.lip_fit
         relative = depth - coef @ self.lip_basis.T
         height = -relative  # toward the cup; the rolled disc comes from above
+        k, w = height.shape[1], int(self.bend_offsets[-1])
+        wrapped = np.concatenate([height[:, k - w :], height, height[:, :w]], axis=1)  # round the circle
         rest = np.full_like(height, -np.inf)
         for o, rise in zip(self.bend_offsets, self.bend_rise_cell, strict=True):
-            np.maximum(rest, np.roll(height, -o, axis=1) - rise, out=rest)  # lowest resting disc at y
+            np.maximum(rest, wrapped[:, w + o : w + o + k] - rise, out=rest)  # lowest resting disc at y
+        wrapped = np.concatenate([rest[:, k - w :], rest, rest[:, :w]], axis=1)
         lip = np.full_like(height, np.inf)
         for o, rise in zip(self.bend_offsets, self.bend_rise, strict=True):
-            np.minimum(lip, np.roll(rest, -o, axis=1) + rise, out=lip)  # envelope of the discs
+            np.minimum(lip, wrapped[:, w + o : w + o + k] + rise, out=lip)  # envelope of the discs
         correction = -lip @ self.lip_fit
         coef = coef + correction
         e = -lip - correction @ self.lip_basis.T  # the bridged profile relative to the end plane

@@ -60,8 +60,9 @@ def analytic_grasp(
     metric: str = "rwr",
     candidates: int = 300,
 ) -> RankedGrasp:
-    """Sample surface grasps on the object in its world pose and return the best by `metric`."""
-    labeller = SuctionLabeller(mesh_world, LabelConfig(cup=cup), mass=mass, com=com_world)
+    """Sample surface grasps on the object in its world pose and return the best by `metric` (labelled
+    for the pick episode: the disturbing wrench includes the inertial load of its peak acceleration)."""
+    labeller = SuctionLabeller(mesh_world, LabelConfig.for_episode(cup), mass=mass, com=com_world)
     points, approaches = surface_candidates(mesh_world, candidates, np.random.default_rng(seed))
     labels = labeller.label(points, approaches, seed, metrics=("ss", "wr", metric))
     score = labels.score(metric)

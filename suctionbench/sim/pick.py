@@ -211,10 +211,11 @@ class PickRunner:
     def label_grasp(self, point: np.ndarray, approach: np.ndarray, mesh: Any = None,
                     com: np.ndarray | None = None) -> dict[str, Any]:
         """Analytic labels of one grasp on the object in its true current pose: seal, nominal wrench
-        resistance, robust label, and every 3D metric's score (the known-objects tables rank by them)."""
+        resistance, robust label, and every 3D metric's score (the known-objects tables rank by them).
+        The disturbing wrench includes the inertial load of the episode's peak acceleration."""
         if mesh is None:
             mesh, com = self.posed_object()
-        labeller = SuctionLabeller(mesh, LabelConfig(cup=self.request.cup), mass=self.record.mass, com=com)
+        labeller = SuctionLabeller(mesh, LabelConfig.for_episode(self.request.cup), mass=self.record.mass, com=com)
         labels = labeller.label(point[None], approach[None], self.request.seed, metrics=tuple(METRICS))
         return {
             "label_seal": bool(labels.seal.seal[0]),

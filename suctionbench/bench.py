@@ -152,57 +152,6 @@ def bench_episode(*, object_key: str, episodes: int, cores: int, seed: int) -> d
     }
 
 
-def bench_agreement(*, set_name: str, trials: int, seed: int, threshold: float = 0.5) -> dict[str, Any]:
-    """Analytic label vs simulated outcome on random reachable surface grasps: trial i drops
-    object i mod |set| (seed i) and executes one uniformly drawn grasp; the analytic label
-    (rwr in the true state) predicts success when rwr > threshold. Confusion matrix and rates."""
-    from collections import Counter
-
-    from suctionbench.objects.registry import list_objects
-    from suctionbench.sim.pick import PickRequest, PickRunner
-
-    records = list_objects(set_name)
-    if trials < 1 or not records:
-        raise InputError(f"bench agreement: need trials >= 1 and a non-empty set (got {trials}, '{set_name}')")
-    runners: dict[str, Any] = {}
-    counts = Counter()
-    failures: Counter[str] = Counter()
-    invalid = 0
-    rows = []
-    for i in range(trials):
-        record = records[i % len(records)]
-        if record.key not in runners:
-            runners[record.key] = PickRunner(PickRequest(record.key, policy="random-surface", record=record))
-        runner = runners[record.key]
-        runner.request.seed = seed + i
-        result = runner.run()
-        if not result["valid"]:
-            invalid += 1
-            continue
-        predicted, actual = result["label_rwr"] > threshold, bool(result["success"])
-        rows.append({"object": record.key, "seed": seed + i, "rwr": result["label_rwr"],
-                     "label_seal": result["label_seal"], "success": actual, "failure": result["failure"]})
-        counts[(predicted, actual)] += 1
-        failures[result["failure"] or "success"] += 1
-    tp, fp = counts[(True, True)], counts[(True, False)]
-    fn, tn = counts[(False, True)], counts[(False, False)]
-    valid = tp + fp + fn + tn
-    return {
-        "set": set_name,
-        "trials": trials,
-        "invalid": invalid,
-        "threshold": threshold,
-        "confusion": {"label_pos_sim_success": tp, "label_pos_sim_fail": fp,
-                      "label_neg_sim_success": fn, "label_neg_sim_fail": tn},
-        "accuracy": round((tp + tn) / valid, 4) if valid else None,
-        "precision": round(tp / (tp + fp), 4) if tp + fp else None,
-        "recall": round(tp / (tp + fn), 4) if tp + fn else None,
-        "sim_success_rate": round((tp + fn) / valid, 4) if valid else None,
-        "outcomes": dict(sorted(failures.items())),
-        "per_trial": rows,
-    }
-
-
 def bench_generate(*, objects: str, datapoints: int, workers: int, seed: int) -> dict[str, Any]:
     """Datapoints/s of dataset generation with all workers vs one worker (the serial reference)
     on the same configuration, render ms per frame, robust-label ms per grasp, and peak memory."""

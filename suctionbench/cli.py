@@ -744,20 +744,27 @@ def bench_episode_cmd(
 
 @bench_app.command("agreement")
 def bench_agreement_cmd(
-    set_name: Annotated[str, typer.Option("--set", help="Object set.")] = "basic",
-    trials: Annotated[int, typer.Option(help="Episodes (random reachable surface grasps).")] = 200,
+    sets: Annotated[str, typer.Option("--sets", help="Comma-separated object sets.")] = "basic,typical,adversarial",
+    trials: Annotated[int, typer.Option(help="Grasps in total, split over the sets (>= 1 per object).")] = 1000,
     threshold: Annotated[float, typer.Option(help="Analytic rwr above which success is predicted.")] = 0.5,
+    workers: Annotated[int, typer.Option(help="Worker processes (0 = all cores).")] = 0,
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
-    """Analytic robust label vs simulated lift on random grasps: confusion matrix (report, never tune)."""
+    """Analytic labeller vs simulated cup on random reachable grasps: seal agreement, lift accuracy,
+    precision / recall, AP and Spearman of rwr, disagreements by cause (report, never tune)."""
 
     def body() -> dict[str, Any]:
-        from suctionbench.bench import bench_agreement
+        from suctionbench.evaluation.agreement import run_agreement
 
-        result = bench_agreement(set_name=set_name, trials=trials, seed=seed, threshold=threshold)
+        names = tuple(s.strip() for s in sets.split(",") if s.strip())
+        if not names:
+            raise InputError(f"--sets '{sets}': name at least one object set")
+        result = run_agreement(sets=names, trials=trials, seed=seed, threshold=threshold, workers=_workers(workers))
         if not as_json:
-            _print_kv(f"analytic rwr > {threshold} vs simulated success ({set_name})", result)
+            for name, figures in {"all sets": result["overall"], **result["sets"]}.items():
+                _print_kv(f"analytic rwr > {threshold} vs simulated success ({name})",
+                          {k: v for k, v in figures.items() if k != "per_trial"})
         return result
 
     _run(as_json, body)

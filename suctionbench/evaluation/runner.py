@@ -7,13 +7,14 @@ import json
 import math
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from suctionbench.errors import InputError
+from suctionbench.evaluation.cycle import CYCLE_MODEL, modelled_compute, picks_per_hour
 from suctionbench.evaluation.tasks import Task
 from suctionbench.io import atomic_path
 
@@ -34,10 +35,13 @@ class Trial:
     model: str | None
     metric: str
     cup: str
+    policy_args: dict[str, Any] = field(default_factory=dict)
+    camera: str = "primesense"
 
 
 def plan_trials(task: Task, policy: str, *, model: str | None, trials: int | None, seed: int | None,
-                metric: str = "rwr", cup: str = "default") -> list[Trial]:
+                metric: str = "rwr", cup: str = "default", policy_args: dict[str, Any] | None = None,
+                camera: str = "primesense") -> list[Trial]:
     """Trial i: object i mod |set|, seed (base seed, i); cycles stable poses for 'stable' tasks."""
     from suctionbench.objects.registry import list_objects
 
@@ -50,7 +54,8 @@ def plan_trials(task: Task, policy: str, *, model: str | None, trials: int | Non
     n = len(records)
     return [
         Trial(i, records[i % n].key, int(np.random.SeedSequence((base, i)).generate_state(1)[0] % 2**31),
-              task.placement, (i // n) % max(task.stable_poses, 1), policy, model, metric, cup)
+              task.placement, (i // n) % max(task.stable_poses, 1), policy, model, metric, cup,
+              dict(policy_args or {}), camera)
         for i in range(count)
     ]
 
@@ -63,6 +68,7 @@ def run_trial(trial: Trial, log_dir: str) -> dict[str, Any]:
     request = PickRequest(
         trial.object_key, seed=trial.seed, policy=trial.policy, placement=trial.placement,
         cup=cup_preset(trial.cup), model=trial.model, metric=trial.metric, stable_pose=trial.stable_pose,
+        policy_args=dict(trial.policy_args), camera=trial.camera,
     )
     record = PickRunner(request).run(log=Path(log_dir) / f"trial_{trial.index:05d}.mcap")
     return {"trial": trial.index, **record}
@@ -70,15 +76,35 @@ def run_trial(trial: Trial, log_dir: str) -> dict[str, Any]:
 
 def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, trials: int | None = None,
              seed: int | None = None, workers: int = 1, engine: str = "local", address: str | None = None,
-             metric: str = "rwr", cup: str = "default",
+             metric: str = "rwr", cup: str = "default", policy_args: dict[str, Any] | None = None,
+             camera: str = "primesense", command: str | None = None,
              progress: Callable[[int], None] | None = None) -> dict[str, Any]:
-    """Run the trials into out/ (trials/*.mcap + run.json) and return the summary from the logs."""
-    if policy not in ("analytic", "random-surface"):
-        from suctionbench.policies.base import policy_factory
+    """Run the trials into out/ (trials/*.mcap + run.json) and return the summary from the logs.
 
-        policy_factory(policy)  # unknown policy -> InputError before any work
-    if policy == "gqcnn":
-        _check_model(model)
+    `policy` is a built-in name or any spec `suctionbench.policies.plugins` loads (a plug-in,
+    PATH.py:FACTORY, package.module:FACTORY) with `policy_args` as its factory's options; it is
+    built once here, so that a bad spec or option fails before any work, and then again in each
+    worker from its spec string. `camera` is a preset name or an intrinsics TOML file. run.json
+    records the policy's label (spec and options), the camera, `command` and the versions."""
+    from suctionbench.policies.plugins import builtin_name, canonical_spec, load_policy, policy_label
+    from suctionbench.sensing.camera import resolve_camera
+
+    policy_args = dict(policy_args or {})
+    label = policy_label(policy, policy_args)
+    if policy in ("analytic", "random-surface"):
+        if policy_args:
+            raise InputError(f"--policy-arg: the known-state policy '{policy}' takes no options")
+        spec = policy
+    else:
+        spec = canonical_spec(policy)
+        kwargs = dict(policy_args)
+        if builtin_name(spec) == "gqcnn":
+            _check_model(kwargs.get("model", model))
+            if model:
+                kwargs.setdefault("model", model)
+        load_policy(spec, kwargs)  # unknown policy or bad options -> InputError before any work
+    intrinsics = resolve_camera(camera)
+    camera_spec = str(Path(camera).resolve()) if Path(str(camera)).is_file() else intrinsics.name
     from suctionbench.config import cup_preset
     from suctionbench.contact.metrics import METRICS
     from suctionbench.parallel import check_engine
@@ -87,15 +113,18 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
         raise InputError(f"--metric '{metric}' is unknown (known: {', '.join(METRICS)})")
     cup_preset(cup)  # unknown preset -> InputError
     check_engine(engine)
-    planned = plan_trials(task, policy, model=model, trials=trials, seed=seed, metric=metric, cup=cup)
+    planned = plan_trials(task, spec, model=model, trials=trials, seed=seed, metric=metric, cup=cup,
+                          policy_args=policy_args, camera=camera_spec)
     out = Path(out)
     log_dir = out / "trials"
     try:
         log_dir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputError(f"output '{out}': cannot create it ({exc.strerror})") from None
-    run = {"task": asdict(task), "policy": policy, "model": model, "metric": metric, "cup": cup,
-           "trials": len(planned), "seed": seed if seed is not None else task.seed}
+    run = {"task": asdict(task), "policy": label, "policy_spec": spec, "policy_args": policy_args, "model": model,
+           "metric": metric, "cup": cup, "camera": intrinsics.name, "trials": len(planned),
+           "seed": seed if seed is not None else task.seed, "compute_model": CYCLE_MODEL.compute_time(spec),
+           "command": command, "versions": _versions()}
     with atomic_path(out / "run.json") as tmp:
         tmp.write_text(json.dumps(run, indent=1))
     from suctionbench.parallel import map_ordered
@@ -105,6 +134,25 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
         if progress:
             progress(1)
     return summarize_run(out)
+
+
+def _versions() -> dict[str, str]:
+    """Versions of the software a run's numbers depend on (recorded in run.json, shown by reports)."""
+    import platform
+
+    import mujoco
+
+    from suctionbench import __version__
+
+    versions = {"suctionbench": __version__, "python": platform.python_version(), "numpy": np.__version__,
+                "mujoco": mujoco.__version__}
+    try:
+        from importlib.metadata import version
+
+        versions["torch"] = version("torch")
+    except Exception:  # torch is a dependency; a broken install only loses the entry
+        pass
+    return versions
 
 
 def _check_model(model: str | None) -> None:
@@ -135,7 +183,7 @@ def summarize_run(run_dir: Path, records: list[dict[str, Any]] | None = None) ->
         records = run_records(run_dir)
     label = f"{run['policy']}-{run.get('metric')}" if run["policy"] == "analytic" else run["policy"]
     return {"policy": run["policy"], "label": label, "task": run["task"]["name"], "set": run["task"]["set"],
-            "metric": run.get("metric"), **trial_metrics(records)}
+            "metric": run.get("metric"), **trial_metrics(records, modelled_compute(run))}
 
 
 def score_stats(scores: np.ndarray, success: np.ndarray) -> dict[str, float | None]:
@@ -161,10 +209,17 @@ def score_stats(scores: np.ndarray, success: np.ndarray) -> dict[str, float | No
     }
 
 
-def trial_metrics(records: list[dict[str, Any]]) -> dict[str, Any]:
+def trial_metrics(records: list[dict[str, Any]], compute: dict[str, float] | None = None) -> dict[str, Any]:
     """AP of the policy's q against simulated success, success rate, analytic-label precision,
     picks per hour with the mean time per phase, how well each 3D metric's score of the executed
-    grasp predicts success, and outcome counts."""
+    grasp predicts success, and outcome counts.
+
+    Picks per hour (and `mean_cycle_s`) come from the deterministic cycle of
+    `suctionbench.evaluation.cycle`: the mean simulated motion time plus `compute`, the modelled
+    sensing and planning seconds of one attempt (default: none). The measured wall times of
+    sensing and planning are reported separately (`mean_sensing_s`, `mean_plan_s`) with the picks
+    per hour they would give (`picks_per_hour_wall`), which varies from run to run."""
+    compute = compute or {"sensing_s": 0.0, "planning_s": 0.0}
     valid = [r for r in records if r.get("valid")]
     success = np.array([bool(r["success"]) for r in valid])
     q = np.array([np.nan if r.get("policy_q") is None else float(r["policy_q"]) for r in valid])
@@ -173,7 +228,9 @@ def trial_metrics(records: list[dict[str, Any]]) -> dict[str, Any]:
     predicted = rwr > PREDICT_THRESHOLD
     phases = {name: np.array([float(r.get(key) or 0.0) for r in valid])
               for name, key in (("sensing", "sensing_time"), ("plan", "plan_time"), ("motion", "sim_time"))}
-    cycle = sum(phases.values()) if valid else np.zeros(0)
+    wall_cycle = sum(phases.values()) if valid else np.zeros(0)
+    modelled = float(compute["sensing_s"]) + float(compute["planning_s"])
+    cycle = phases["motion"] + modelled
     rate = float(success.mean()) if len(valid) else 0.0
     scored = [r for r in valid if r.get("label_scores")]
     by_metric = {
@@ -191,7 +248,10 @@ def trial_metrics(records: list[dict[str, Any]]) -> dict[str, Any]:
         "label_precision": round(float(success[predicted].mean()), 4) if predicted.any() else None,
         "label_positive_rate": round(float(predicted.mean()), 4) if len(valid) else None,
         "mean_cycle_s": round(float(cycle.mean()), 3) if len(valid) else None,
-        "picks_per_hour": round(3600.0 * rate / float(cycle.mean()), 1) if len(valid) and cycle.mean() > 0 else None,
+        "picks_per_hour": picks_per_hour(rate, float(cycle.mean())) if len(valid) else None,
+        "modelled_sensing_s": round(float(compute["sensing_s"]), 4),
+        "modelled_plan_s": round(float(compute["planning_s"]), 4),
+        "picks_per_hour_wall": picks_per_hour(rate, float(wall_cycle.mean())) if len(valid) else None,
         **{f"mean_{name}_s": round(float(t.mean()), 4) if len(valid) else None for name, t in phases.items()},
         "by_metric": by_metric,
         "outcomes": dict(sorted(Counter(r["failure"] or "success" for r in records).items())),

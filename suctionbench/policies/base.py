@@ -27,7 +27,7 @@ Geometry read from the image (`SceneCloud`)
 - Grasp at a pixel: the point is the *raw* depth pixel deprojected (the measured surface, so that
   the grasp lies on what the sensor saw; smoothing would pull pixels at a silhouette towards the
   table behind it), and the approach is minus the smoothed normal.
-- Valid grasp pixels (the seed sampler of FACTS section 4, shared by every policy so that all of
+- Valid grasp pixels (the seed sampler of gqcnn's Dex-Net 3.0 suction policy, shared by every policy so that all of
   them choose from the same candidate distribution): object pixels with a normal whose approach
   is within `max_optical_axis_angle` (30 deg) of the optical axis and within `max_approach_angle`
   (80 deg) of straight down (the table's downward normal). If no object pixel passes, both angle
@@ -37,7 +37,6 @@ Geometry read from the image (`SceneCloud`)
 
 from __future__ import annotations
 
-import importlib
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -186,25 +185,21 @@ def register_policy(name: str, entry_point: str | Callable[..., Policy]) -> None
 
 
 def policy_factory(name: str) -> Callable[..., Policy]:
-    """The factory registered under `name` (or an alias); InputError for unknown names."""
-    key = ALIASES.get(str(name).strip().lower(), str(name).strip().lower())
-    if key not in POLICIES:
-        raise InputError(f"policy '{name}' is unknown (known: {', '.join(sorted(POLICIES))})")
-    entry = POLICIES[key]
-    if callable(entry):
-        return entry
-    module, _, attribute = entry.partition(":")
-    return getattr(importlib.import_module(module), attribute)
+    """The factory a policy spec names: a registered name (or alias), an installed plug-in, or a
+    user's PATH.py:FACTORY / package.module:FACTORY (`suctionbench.policies.plugins`); InputError
+    when there is none."""
+    from suctionbench.policies.plugins import resolve_factory
+
+    return resolve_factory(name)
 
 
 def make_policy(name: str, **kwargs: Any) -> Policy:
-    """Build the policy registered as `name`, e.g. make_policy("centroid", num_candidates=500) or
-    make_policy("gqcnn", model="path/to/model"). Unknown names and options raise InputError."""
-    factory = policy_factory(name)
-    try:
-        return factory(**kwargs)
-    except TypeError as exc:
-        raise InputError(f"policy '{name}': bad options {sorted(kwargs)} ({exc})") from None
+    """Build the policy a spec names, e.g. make_policy("centroid", num_candidates=500),
+    make_policy("gqcnn", model="path/to/model") or make_policy("my_policy.py:make_policy", k=1).
+    Unknown names and options raise InputError (`suctionbench.policies.plugins.load_policy`)."""
+    from suctionbench.policies.plugins import load_policy
+
+    return load_policy(name, kwargs)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -214,7 +209,7 @@ def make_policy(name: str, **kwargs: Any) -> Policy:
 
 @dataclass(frozen=True)
 class SamplerConfig:
-    """Which pixels a policy may grasp, and how normals are read (FACTS section 4 seed sampler)."""
+    """Which pixels a policy may grasp, and how normals are read (gqcnn's Dex-Net 3.0 seed sampler)."""
 
     max_optical_axis_angle: float = math.radians(30.0)
     """Largest angle (rad) between the approach and the optical axis; gqcnn's

@@ -1,6 +1,6 @@
 """The GQ-CNN suction policy of Dex-Net 3.0: the cross-entropy method over grasp pixels, scored by a
 grasp-quality network (gqcnn's CrossEntropyRobustGraspingPolicy with the Dex-Net 3.0 settings of
-FACTS section 4).
+its replication configuration; Mahler et al., ICRA 2018).
 
 Algorithm (one `plan`)
 ----------------------
@@ -81,7 +81,7 @@ class GraspQualityModel(Protocol):
 
 @dataclass(frozen=True)
 class CEMConfig:
-    """Cross-entropy method settings (gqcnn's Dex-Net 3.0 suction policy, FACTS section 4)."""
+    """Cross-entropy method settings (gqcnn's Dex-Net 3.0 suction policy)."""
 
     num_seed_samples: int = 250
     """Pixels drawn uniformly for the first round. gqcnn: 250."""
@@ -116,7 +116,7 @@ class CEMConfig:
 
     sampler: SamplerConfig = field(default_factory=SamplerConfig)
     """Valid grasp pixels and normal estimation: 30 deg to the optical axis, 80 deg to straight
-    down, 1 px depth smoothing (FACTS section 4)."""
+    down, 1 px depth smoothing (gqcnn's Dex-Net 3.0 configuration)."""
 
     thumbnail: ThumbnailConfig = THUMBNAIL_GQCNN
     """Thumbnail geometry the network was trained on (96 px crop scaled to 32 x 32)."""

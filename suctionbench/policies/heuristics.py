@@ -51,7 +51,7 @@ class HeuristicConfig:
     the same number of uniformly drawn candidates before ranking)."""
 
     sampler: SamplerConfig = field(default_factory=SamplerConfig)
-    """Valid grasp pixels and normal estimation (FACTS section 4 seed sampler)."""
+    """Valid grasp pixels and normal estimation (gqcnn's Dex-Net 3.0 seed sampler)."""
 
     cup_radius: float = CUP_DEFAULT.radius
     """Radius (m) of the disc whose planarity is measured (the paper's 15 mm cup: 7.5 mm); also

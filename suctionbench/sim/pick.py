@@ -47,7 +47,11 @@ class PickRequest:
     """Grasp (x, y, z, vx, vy, vz) in the object's own frame; None: use `policy`."""
 
     policy: str = "analytic"
-    """Policy choosing the grasp when none is given (known-state: 'analytic')."""
+    """Policy choosing the grasp when none is given (known-state: 'analytic'), or any policy spec
+    `suctionbench.policies.plugins` loads (a plug-in name, PATH.py:FACTORY, package.module:FACTORY)."""
+
+    policy_args: dict[str, Any] = field(default_factory=dict)
+    """Keyword options of the image policy's factory (`--policy-arg key=value`)."""
 
     placement: str = "drop"
     """'drop' (random orientation, settled) or 'stable' (most probable stable pose at the centre)."""
@@ -77,8 +81,8 @@ class PickRequest:
     """Apply the simulated sensor's axial noise (sensing.noise.AxialNoiseConfig) to observations."""
 
 
-_POLICY_CACHE: dict[tuple[str, str | None], Any] = {}
-"""Image policies by (name, model directory), built once per process."""
+_POLICY_CACHE: dict[tuple[str, str | None, str], Any] = {}
+"""Image policies by (spec, model directory, options), built once per process."""
 
 
 def _pose(position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
@@ -133,7 +137,8 @@ class PickRunner:
         req = self.request
         return {
             "suctionbench_version": __version__, "mujoco_version": mujoco.__version__, "object": req.object_key,
-            "seed": req.seed, "policy": req.policy if req.grasp is None else "given", "placement": req.placement,
+            "seed": req.seed, "policy": req.policy if req.grasp is None else "given",
+            "policy_args": req.policy_args if req.grasp is None else {}, "placement": req.placement,
             "cup": to_dict(req.cup), "camera": to_dict(self.intrinsics), "episode": to_dict(req.episode),
         }
 
@@ -248,10 +253,13 @@ class PickRunner:
         from suctionbench.policies.analytic import RankedGrasp
         from suctionbench.policies.base import make_policy
 
-        key = (self.request.policy, self.request.model)
+        req = self.request
+        key = (req.policy, req.model, repr(sorted(req.policy_args.items())))
         if key not in _POLICY_CACHE:  # policies are stateless between plans; models load once per process
-            kwargs = {"model": self.request.model} if self.request.policy == "gqcnn" and self.request.model else {}
-            _POLICY_CACHE[key] = make_policy(self.request.policy, **kwargs)
+            kwargs = dict(req.policy_args)
+            if req.policy in ("gqcnn", "gqcnn-cem") and req.model:
+                kwargs["model"] = req.model
+            _POLICY_CACHE[key] = make_policy(req.policy, **kwargs)
         policy = _POLICY_CACHE[key]
         start = time.perf_counter()
         self.observation = self.observe()

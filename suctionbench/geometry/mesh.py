@@ -7,6 +7,7 @@ sees real holes.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -18,7 +19,7 @@ from suctionbench.errors import InputError
 SUPPORTED_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf")
 """File types suctionbench reads (through trimesh)."""
 
-UNIT_SCALES = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+UNIT_SCALES = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
 """Metres per unit for the `units` argument."""
 
 MIN_EXTENT = 0.005
@@ -52,33 +53,59 @@ class MeshInfo:
         return np.asarray(self.mesh.centroid, dtype=float)
 
 
-def load_mesh(path: str | Path, units: str = "m") -> MeshInfo:
-    """Read a mesh file, convert it to metres and validate it (see `validate_mesh`)."""
-    path = Path(path)
-    units = units.lower()
-    if units not in UNIT_SCALES:
+def mesh_scale(units: str = "m", scale: float = 1.0) -> float:
+    """Metres per file unit: the unit's length times an extra factor (a URDF ``scale``, say)."""
+    if units.lower() not in UNIT_SCALES:
         raise InputError(f"units '{units}' is unknown (known: {', '.join(UNIT_SCALES)})")
+    try:
+        factor = float(scale)
+    except (TypeError, ValueError):
+        raise InputError(f"scale {scale!r}: not a number") from None
+    if not (math.isfinite(factor) and factor > 0):
+        raise InputError(f"scale {scale!r}: must be a positive, finite factor")
+    return UNIT_SCALES[units.lower()] * factor
+
+
+def read_mesh(path: str | Path) -> trimesh.Trimesh:
+    """The triangles of a mesh file as written (no merging, no processing), or an InputError that
+    names the file and its format: missing, unsupported, unreadable (garbage, truncated, a
+    format trimesh cannot parse) or without triangles."""
+    path = Path(path)
     if not path.exists():
         raise InputError(f"mesh '{path}': file not found")
     if not path.is_file():
         raise InputError(f"mesh '{path}': not a regular file")
-    if path.suffix.lower() not in SUPPORTED_SUFFIXES:
+    kind = path.suffix.lower()
+    if kind not in SUPPORTED_SUFFIXES:
         raise InputError(
             f"mesh '{path}': unsupported format '{path.suffix or '(none)'}' "
             f"(supported: {', '.join(SUPPORTED_SUFFIXES)})"
         )
+    kind = kind[1:]
     try:
         # process=False: trimesh's processing silently drops NaN vertices; validate first.
-        loaded = trimesh.load(str(path), force="mesh", process=False)
+        with np.errstate(all="ignore"):
+            loaded = trimesh.load(str(path), force="mesh", process=False)
     except Exception as exc:  # trimesh raises many exception types for malformed files
-        raise InputError(f"mesh '{path}': could not be read ({type(exc).__name__}: {exc})") from None
+        reason = " ".join(str(exc).split())[:120] or type(exc).__name__
+        raise InputError(f"mesh '{path}': not a readable mesh (format {kind}: {reason})") from None
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
-        raise InputError(f"mesh '{path}': no triangles could be read (empty or malformed file)")
+        raise InputError(f"mesh '{path}': not a readable mesh (format {kind}: no triangles in the file)")
+    faces = np.asarray(loaded.faces)
+    if faces.min() < 0 or faces.max() >= len(loaded.vertices):
+        raise InputError(f"mesh '{path}': not a readable mesh (format {kind}: faces name missing vertices)")
+    return loaded
+
+
+def load_mesh(path: str | Path, units: str = "m", scale: float = 1.0) -> MeshInfo:
+    """Read a mesh file, convert it to metres (`units` times `scale`) and validate it (see `validate_mesh`)."""
+    factor = mesh_scale(units, scale)
+    loaded = read_mesh(path)
     if not np.all(np.isfinite(loaded.vertices)):
         raise InputError(f"mesh '{path}': vertices contain NaN or infinite coordinates")
     loaded.process(validate=False)
-    if UNIT_SCALES[units] != 1.0:
-        loaded.apply_scale(UNIT_SCALES[units])
+    if factor != 1.0:
+        loaded.apply_scale(factor)
     return validate_mesh(loaded, source=str(path))
 
 
@@ -109,7 +136,7 @@ def validate_mesh(mesh: trimesh.Trimesh, source: str = "mesh") -> MeshInfo:
     if largest < MIN_EXTENT or largest > MAX_EXTENT:
         raise InputError(
             f"mesh '{source}': absurd scale (largest extent {largest:.4g} m, expected "
-            f"{MIN_EXTENT:g}-{MAX_EXTENT:g} m); pass the right units (mm, cm or m)"
+            f"{MIN_EXTENT:g}-{MAX_EXTENT:g} m); pass the file's units (mm, cm, m, in) or a scale factor"
         )
     watertight = bool(mesh.is_watertight and mesh.is_winding_consistent)
     warnings: list[str] = []

@@ -17,14 +17,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import coacd
 import numpy as np
 import tomli_w
 import trimesh
 
 from suctionbench.config import CUP_DEFAULT
 from suctionbench.errors import InputError
-from suctionbench.geometry.mesh import UNIT_SCALES, validate_mesh
+from suctionbench.geometry.mesh import mesh_scale, validate_mesh
+from suctionbench.objects.decompose import CoacdFailed, run_coacd
 from suctionbench.objects.spec import ObjectSpec
 
 MAX_FACES = 6000
@@ -152,26 +152,35 @@ def stable_poses(mesh: trimesh.Trimesh, com: np.ndarray) -> list[dict[str, Any]]
 
 
 def convex_parts(mesh: trimesh.Trimesh, threshold: float, max_hulls: int, seed: int = 0) -> list[trimesh.Trimesh]:
-    """Convex decomposition with CoACD (MuJoCo collides meshes by their convex hulls)."""
-    coacd.set_log_level("error")
-    raw = coacd.run_coacd(
-        coacd.Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces)),
-        threshold=threshold,
-        max_convex_hull=max_hulls,
-        seed=seed,
-    )
+    """Convex decomposition with CoACD (MuJoCo collides meshes by their convex hulls), run in a child
+    process (suctionbench.objects.decompose) so that a native crash raises CoacdFailed here."""
+    raw = run_coacd(np.asarray(mesh.vertices), np.asarray(mesh.faces), threshold, max_hulls, seed)
     parts = [trimesh.Trimesh(v, f, process=True).convex_hull for v, f in raw]
     return sorted(parts, key=lambda p: tuple(np.round(p.centroid, 6)))
 
 
-def decompose_mesh(mesh: trimesh.Trimesh) -> tuple[list[trimesh.Trimesh], dict[str, Any]]:
-    """Convex parts following COACD_SCHEDULE, and how well they fit (the last try if none fits)."""
+def decompose_mesh(mesh: trimesh.Trimesh, source: str = "mesh") -> tuple[list[trimesh.Trimesh], dict[str, Any]]:
+    """Convex parts following COACD_SCHEDULE, and how well they fit (the last try if none fits).
+
+    A CoACD run that crashes moves on to the next threshold; if every run crashes, a convex object
+    (hull within EXCESS_MAX of its volume) falls back to its hull, anything else is an InputError."""
+    best, failures = None, []
     for threshold, max_hulls in COACD_SCHEDULE:
-        parts = convex_parts(mesh, threshold, max_hulls)
+        try:
+            parts = convex_parts(mesh, threshold, max_hulls)
+        except CoacdFailed as exc:
+            failures.append(f"threshold {threshold:g}: {exc}")
+            continue
         quality = decomposition_quality(mesh, parts)
+        best = parts, {"method": "coacd", "threshold": threshold, "max_convex_hull": max_hulls, **quality}
         if quality["excess"] <= EXCESS_MAX and quality["coverage"] >= COVERAGE_MIN:
             break
-    return parts, {"method": "coacd", "threshold": threshold, "max_convex_hull": max_hulls, **quality}
+    if best is not None:
+        return best
+    hull = mesh.convex_hull
+    if float(hull.volume) <= EXCESS_MAX * float(mesh.volume):
+        return [hull], {"method": "hull", "failures": failures, **decomposition_quality(mesh, [hull])}
+    raise InputError(f"mesh '{source}': convex decomposition failed ({'; '.join(failures)})")
 
 
 def decomposition_quality(mesh: trimesh.Trimesh, parts: list[trimesh.Trimesh]) -> dict[str, float]:
@@ -193,6 +202,7 @@ def build_object(
     *,
     source: str = "generated",
     units: str = "m",
+    scale: float = 1.0,
     mass: float | None = None,
     decompose: bool = True,
 ) -> ObjectRecord:
@@ -213,7 +223,7 @@ def build_object(
         description=spec.description,
         source=source,
         units=units,
-        scale=UNIT_SCALES[units.lower()],
+        scale=mesh_scale(units, scale),
         density=round(mesh.density, 6),
         mass=round(mass, 9),
         com=np.round(com, 9).tolist(),
@@ -227,6 +237,8 @@ def build_object(
         stable_poses=stable_poses(mesh, com),
         parts=[],
     )
+    if decompose:  # before any folder exists: a failure leaves nothing behind
+        parts, record.decomposition = decompose_mesh(mesh, source=source)
     out_dir = Path(out_dir)
     try:
         out_dir.parent.mkdir(parents=True, exist_ok=True)
@@ -236,7 +248,6 @@ def build_object(
     try:
         mesh.export(tmp / "mesh.stl")
         if decompose:
-            parts, record.decomposition = decompose_mesh(mesh)
             (tmp / "parts").mkdir()
             for i, part in enumerate(parts):
                 part.export(tmp / "parts" / f"part_{i:03d}.stl")

@@ -1,30 +1,20 @@
-"""Import a user's own mesh (OBJ / STL / PLY / GLB ...) as an object: validate, repair small
-holes, decompose, compute stable poses."""
+"""Import a user's own mesh (OBJ / STL / PLY / GLB ...) as an object: read, scale, validate, make
+one closed solid (see `suctionbench.objects.repair`), decompose, compute stable poses."""
 
 from __future__ import annotations
 
 import re
 from pathlib import Path
 
-import trimesh
-
 from suctionbench.errors import InputError
 from suctionbench.geometry.mesh import load_mesh
 from suctionbench.objects.build import ObjectRecord, build_object
 from suctionbench.objects.registry import set_dir
+from suctionbench.objects.repair import solidify
 from suctionbench.objects.spec import SETS, ObjectSpec
 
 NAME_PATTERN = re.compile(r"^[a-z0-9][a-z0-9_\-]{0,63}$")
 """Object and set names: lower case letters, digits, '_' and '-'."""
-
-
-def repair(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
-    """Close small holes and make winding and normals consistent (trimesh's repair tools)."""
-    mesh = mesh.copy()
-    trimesh.repair.fix_winding(mesh)
-    trimesh.repair.fill_holes(mesh)
-    trimesh.repair.fix_normals(mesh)
-    return mesh
 
 
 def import_mesh(
@@ -33,12 +23,21 @@ def import_mesh(
     set_name: str,
     name: str,
     units: str = "m",
+    scale: float = 1.0,
     mass: float | None = None,
     try_repair: bool = True,
     overwrite: bool = False,
     root: Path | None = None,
 ) -> ObjectRecord:
-    """Import a mesh file into SET/NAME under the user object root (or `root`)."""
+    """Import a mesh file into SET/NAME under the user object root (or `root`).
+
+    The file is read as written, scaled to metres (`units` times `scale`), validated, made one
+    closed solid (`suctionbench.objects.repair.solidify`: seams merged, duplicated faces removed,
+    touching or overlapping pieces united, small holes closed, stray open sheets dropped), then
+    built (mass, stable poses, convex parts). What was repaired is kept in the record's
+    ``params["repairs"]``. With ``try_repair=False`` a mesh that needs any repair beyond merging
+    seams is rejected instead.
+    """
     for what, value in (("--set", set_name), ("--name", name)):
         if not NAME_PATTERN.match(value):
             raise InputError(f"{what} '{value}': use lower-case letters, digits, '_' and '-' (max 64)")
@@ -47,11 +46,10 @@ def import_mesh(
     out_dir = (root / set_name if root else set_dir(set_name)) / name
     if out_dir.exists() and not overwrite:
         raise InputError(f"object '{set_name}/{name}' already exists at {out_dir} (pass --overwrite)")
-    info = load_mesh(path, units=units)
-    mesh = info.mesh
-    if not info.watertight and try_repair:
-        mesh = repair(mesh)
-    if not (mesh.is_watertight and mesh.is_winding_consistent):
-        raise InputError(f"mesh '{path}': not watertight and could not be repaired (holes too large?)")
-    spec = ObjectSpec(name=name, set=set_name, generator="import", params={}, description=f"imported from {path}")
-    return build_object(mesh, spec, out_dir, source=str(path), units=units, mass=mass)
+    info = load_mesh(path, units=units, scale=scale)
+    solid = solidify(info.mesh, source=str(path))
+    if solid.notes and not try_repair:
+        raise InputError(f"mesh '{path}': needs repair ({solid.notes[0]}) and repairs are off (--no-repair)")
+    params = {"units": units, "scale": float(scale), "repairs": solid.notes}
+    spec = ObjectSpec(name=name, set=set_name, generator="import", params=params, description=f"imported from {path}")
+    return build_object(solid.mesh, spec, out_dir, source=str(path), units=units, scale=scale, mass=mass)

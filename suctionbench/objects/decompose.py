@@ -1,0 +1,102 @@
+"""CoACD convex decomposition in a child process.
+
+CoACD is native code: on some meshes it aborts (SIGABRT) or runs away, and in-process that kills
+the caller without a JSON line and leaves its temp folders behind. Here each run is a child
+Python process (``python -m suctionbench.objects.decompose IN.npz OUT.npz``) that reads the mesh
+and the parameters from IN.npz and writes the parts to OUT.npz, both in a private temp folder
+outside any object set, removed when the run ends however it ends. A crash, a kill or a run past
+COACD_TIMEOUT becomes `CoacdFailed`, which the caller turns into a fallback or a clean error.
+
+The child imports only numpy and coacd, so it starts in a fraction of a second.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+COACD_TIMEOUT = 300.0
+"""Seconds one CoACD run may take before it is stopped (the slowest objects take ~20 s)."""
+
+COACD_OPTIONS = {
+    # Our meshes are validated closed manifolds before they get here, so CoACD's own manifold
+    # remeshing (on by default, "auto") only costs time: it was 80 % of a 1k-face gripper's 60 s.
+    "preprocess_mode": "off",
+}
+"""Options passed to coacd.run_coacd besides threshold, max_convex_hull and seed."""
+
+
+class CoacdFailed(RuntimeError):
+    """CoACD crashed, was killed or ran past its time; the message says which."""
+
+
+def _child_command(job: Path, result: Path) -> list[str]:
+    """The child's command line (a test swaps it for one that aborts)."""
+    return [sys.executable, "-m", "suctionbench.objects.decompose", str(job), str(result)]
+
+
+def run_coacd(
+    vertices: np.ndarray, faces: np.ndarray, threshold: float, max_hulls: int, seed: int = 0
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(vertices, faces) of each convex part CoACD finds, computed in a child process."""
+    with tempfile.TemporaryDirectory(prefix="suctionbench-coacd-") as folder:
+        job, result = Path(folder) / "job.npz", Path(folder) / "parts.npz"
+        np.savez(
+            job,
+            vertices=np.ascontiguousarray(vertices, dtype=np.float64),
+            faces=np.ascontiguousarray(faces, dtype=np.int64),
+            threshold=float(threshold),
+            max_hulls=int(max_hulls),
+            seed=int(seed),
+        )
+        env = {**os.environ, "PYTHONFAULTHANDLER": "0"}
+        try:
+            done = subprocess.run(
+                _child_command(job, result), capture_output=True, timeout=COACD_TIMEOUT, env=env, check=False
+            )
+        except subprocess.TimeoutExpired:
+            raise CoacdFailed(f"CoACD ran past {COACD_TIMEOUT:g} s and was stopped") from None
+        if done.returncode != 0 or not result.is_file():
+            raise CoacdFailed(_describe_exit(done.returncode, done.stderr))
+        with np.load(result) as data:
+            count = int(data["count"])
+            return [(data[f"v{i}"], data[f"f{i}"]) for i in range(count)]
+
+
+def _describe_exit(code: int, stderr: bytes) -> str:
+    if code < 0:
+        try:
+            name = signal.Signals(-code).name
+        except ValueError:
+            name = f"signal {-code}"
+        return f"CoACD crashed ({name})"
+    lines = [line for line in stderr.decode(errors="replace").splitlines() if line.strip()]
+    return f"CoACD failed (exit {code}{': ' + lines[-1].strip()[:160] if lines else ''})"
+
+
+def _main(job: str, result: str) -> None:
+    import coacd
+
+    with np.load(job) as data:
+        vertices, faces = data["vertices"], data["faces"]
+        threshold, max_hulls, seed = float(data["threshold"]), int(data["max_hulls"]), int(data["seed"])
+    coacd.set_log_level("error")
+    parts = coacd.run_coacd(
+        coacd.Mesh(vertices, faces), threshold=threshold, max_convex_hull=max_hulls, seed=seed, **COACD_OPTIONS
+    )
+    arrays = {"count": np.array(len(parts))}
+    for i, (v, f) in enumerate(parts):
+        arrays[f"v{i}"], arrays[f"f{i}"] = np.asarray(v, dtype=np.float64), np.asarray(f, dtype=np.int64)
+    tmp = f"{result}.part.npz"
+    np.savez(tmp, **arrays)
+    os.replace(tmp, result)
+
+
+if __name__ == "__main__":
+    _main(*sys.argv[1:3])

@@ -1,0 +1,375 @@
+"""Importing meshes as users have them: a corpus of third-party-like meshes (textured OBJs whose seams
+split vertices, pieces that touch or overlap, non-manifold edges, duplicated faces, stray open
+bodies, a surface that passes through itself, garbage, truncated files, odd units) and real robot
+meshes shipped by dm_control; each either imports as one closed solid or fails with the message of
+its defect class."""
+
+from __future__ import annotations
+
+import json
+import re
+import sys
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from suctionbench.errors import InputError
+from suctionbench.objects.importer import import_mesh
+
+# -- the corpus -----------------------------------------------------------------------------------
+
+
+@dataclass
+class Case:
+    """One corpus mesh: its file, import options, and what should happen."""
+
+    name: str
+    path: Path
+    options: dict = field(default_factory=dict)
+    error: str | None = None
+    """None: imports with `options`; else a regex the InputError must match."""
+    warning: str | None = None
+    """A regex one of the import's notes must match (what was repaired)."""
+    volume: float | None = None
+    """Expected volume (m^3) of the imported solid, where the defect would change it."""
+
+
+def _obj_text(vertices: np.ndarray, faces: np.ndarray, groups: list[np.ndarray] | None = None) -> str:
+    """An OBJ as exporters with textures write it: unique positions, but a UV and a normal per face
+    corner (flat shading, UV islands per face), so a loader splits vertices at every seam."""
+    lines = [f"v {x:.9g} {y:.9g} {z:.9g}" for x, y, z in vertices]
+    rng = np.random.default_rng(len(faces))
+    uv = rng.uniform(size=(3 * len(faces), 2))
+    lines += [f"vt {u:.6f} {v:.6f}" for u, v in uv]
+    tri = vertices[faces]
+    normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    lines += [f"vn {x:.6f} {y:.6f} {z:.6f}" for x, y, z in normals]
+    groups = groups if groups is not None else [np.arange(len(faces))]
+    for g, members in enumerate(groups):
+        lines.append(f"o piece_{g}")
+        for i in members:
+            corners = [f"{faces[i, k] + 1}/{3 * i + k + 1}/{i + 1}" for k in range(3)]
+            lines.append("f " + " ".join(corners))
+    return "\n".join(lines) + "\n"
+
+
+def _tube(path_points: np.ndarray, radius: float, sides: int = 16) -> trimesh.Trimesh:
+    """A closed tube (capped) swept along a polyline in the xy plane."""
+    tangents = np.gradient(path_points, axis=0)
+    tangents /= np.linalg.norm(tangents, axis=1, keepdims=True)
+    side = np.cross([0.0, 0.0, 1.0], tangents)
+    angles = np.linspace(0, 2 * np.pi, sides, endpoint=False)
+    rings = (
+        path_points[:, None, :]
+        + radius * np.cos(angles)[None, :, None] * side[:, None, :]
+        + radius * np.sin(angles)[None, :, None] * np.array([0.0, 0.0, 1.0])
+    )
+    vertices = [*rings.reshape(-1, 3), path_points[0], path_points[-1]]
+    n = len(path_points)
+    faces = []
+    for i in range(n - 1):
+        for j in range(sides):
+            a, b = i * sides + j, i * sides + (j + 1) % sides
+            c, d = a + sides, b + sides
+            faces += [[a, b, d], [a, d, c]]
+    start, end = n * sides, n * sides + 1
+    for j in range(sides):
+        faces.append([start, (j + 1) % sides, j])
+        faces.append([end, (n - 1) * sides + j, (n - 1) * sides + (j + 1) % sides])
+    mesh = trimesh.Trimesh(np.array(vertices), np.array(faces), process=False)
+    if mesh.volume < 0:
+        mesh.invert()
+    return mesh
+
+
+def _box(extents, offset=(0.0, 0.0, 0.0)) -> trimesh.Trimesh:
+    return trimesh.creation.box(extents=extents).apply_translation(offset)
+
+
+def build_corpus(directory: Path) -> list[Case]:
+    """Write the corpus under `directory` and describe it."""
+    directory.mkdir(parents=True, exist_ok=True)
+    cases: list[Case] = []
+
+    def save(name: str, mesh: trimesh.Trimesh, **kwargs) -> Case:
+        path = directory / name
+        mesh.export(path)
+        cases.append(Case(name, path, **kwargs))
+        return cases[-1]
+
+    def text(name: str, content: str | bytes, **kwargs) -> Case:
+        path = directory / name
+        path.write_bytes(content if isinstance(content, bytes) else content.encode())
+        cases.append(Case(name, path, **kwargs))
+        return cases[-1]
+
+    # Textured OBJs: closed, but every UV/normal seam splits the loader's vertices.
+    box = _box((0.06, 0.04, 0.03))
+    text("seams_box.obj", _obj_text(box.vertices, box.faces), volume=0.06 * 0.04 * 0.03)
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.03)
+    text("seams_sphere.obj", _obj_text(sphere.vertices, sphere.faces), volume=sphere.volume)
+    cylinder = trimesh.creation.cylinder(radius=0.025, height=0.08, sections=40)
+    text("seams_cylinder.obj", _obj_text(cylinder.vertices, cylinder.faces), volume=cylinder.volume)
+    # Pieces that touch face to face (a modeller's L-bracket, a CAD table) and pieces that overlap.
+    piece_a, piece_b = _box((0.06, 0.02, 0.02)), _box((0.02, 0.02, 0.04), (0.02, 0.0, 0.03))
+    both = trimesh.util.concatenate([piece_a, piece_b])
+    text(
+        "touching_bracket.obj",
+        _obj_text(both.vertices, both.faces, [np.arange(12), np.arange(12, 24)]),
+        warning="touch",
+        volume=0.06 * 0.02 * 0.02 + 0.02 * 0.02 * 0.04,
+    )
+    legs = [_box((0.01, 0.01, 0.05), (x, y, 0.025)) for x in (-0.04, 0.04) for y in (-0.025, 0.025)]
+    table = trimesh.util.concatenate([_box((0.1, 0.06, 0.01), (0.0, 0.0, 0.055)), *legs])
+    save("touching_table.stl", table, warning="touch", volume=0.1 * 0.06 * 0.01 + 4 * 0.01 * 0.01 * 0.05)
+    overlap = trimesh.util.concatenate([_box((0.05, 0.03, 0.03)), _box((0.05, 0.03, 0.03), (0.02, 0.0, 0.0))])
+    save("overlapping_boxes.ply", overlap, warning="overlap", volume=0.07 * 0.03 * 0.03)
+    # A closed box with a dangling fin on one edge and one with an inner wall: non-manifold edges.
+    fin_box = _box((0.05, 0.05, 0.05))
+    corner = fin_box.vertices[fin_box.edges_unique[0]]
+    fin = trimesh.Trimesh(np.vstack([corner, corner.mean(0) + [0.0, 0.03, 0.03]]), [[0, 1, 2]])
+    save("nonmanifold_fin.stl", trimesh.util.concatenate([fin_box, fin]), warning="non-manifold", volume=0.05**3)
+    stack = trimesh.util.concatenate([_box((0.04, 0.04, 0.02), (0, 0, 0.01)), _box((0.04, 0.04, 0.02), (0, 0, 0.03))])
+    stack.merge_vertices()
+    middle = np.isclose(stack.triangles_center[:, 2], 0.02)
+    wall = np.flatnonzero(middle)[:2]  # one of the two coincident middle squares
+    keep = ~middle
+    keep[wall] = True
+    stack.update_faces(keep)
+    save("nonmanifold_wall.stl", stack, warning="non-manifold", volume=0.04 * 0.04 * 0.04)
+    # Duplicated faces (an exporter wrote part of the surface twice).
+    dup = trimesh.creation.icosphere(subdivisions=2, radius=0.03)
+    dup = trimesh.Trimesh(dup.vertices, np.vstack([dup.faces, dup.faces[:40]]), process=False)
+    save("duplicated_faces.stl", dup, warning="duplicated", volume=trimesh.creation.icosphere(2, 0.03).volume)
+    # A bottle with a separate open label sleeve around it.
+    bottle = trimesh.creation.cylinder(radius=0.03, height=0.12, sections=32)
+    sleeve = trimesh.creation.cylinder(radius=0.0302, height=0.05, sections=32)
+    sleeve.update_faces(np.abs(sleeve.face_normals[:, 2]) < 0.5)
+    save("open_second_body.obj", trimesh.util.concatenate([bottle, sleeve]), warning="open", volume=bottle.volume)
+    # A box with a small hole (a scan's missing patch) that a fan closes.
+    holed = trimesh.creation.icosphere(subdivisions=3, radius=0.03)
+    holed.update_faces(np.linalg.norm(holed.triangles_center - [0, 0, 0.03], axis=1) > 0.008)
+    save("small_hole.ply", holed, warning="hole")
+    # Meshes in other units: millimetres and inches (URDF-style scale).
+    save("part_mm.stl", _box((60.0, 40.0, 20.0)), options={"units": "mm"}, volume=0.06 * 0.04 * 0.02)
+    save("part_in.stl", _box((2.0, 1.5, 1.0)), options={"units": "in"}, volume=3.0 * 0.0254**3)
+    save("part_scaled.stl", _box((6.0, 4.0, 2.0)), options={"scale": 0.01}, volume=0.06 * 0.04 * 0.02)
+    # Unfixable: the defect must be named.
+    hemisphere = trimesh.creation.icosphere(subdivisions=3, radius=0.04)
+    hemisphere.update_faces(hemisphere.triangles_center[:, 2] > 0)
+    save("hemisphere.stl", hemisphere, error=r"not watertight: 1 hole up to 80 mm across")
+    t = np.linspace(0.15, 2 * np.pi - 0.15, 80)
+    curl = np.stack([0.04 * np.cos(t), 0.025 * np.sin(2 * t), np.zeros_like(t)], axis=1)
+    save("self_intersecting.stl", _tube(curl, 0.008), error="self-intersecting")
+    apart = trimesh.util.concatenate([_box((0.03,) * 3), _box((0.03,) * 3, (0.1, 0, 0))])
+    save("two_apart.stl", apart, error="2 disconnected bodies")
+    save("big_in_mm.stl", _box((60.0, 40.0, 20.0)), error=r"absurd scale.*units")
+    rng = np.random.default_rng(5)
+    text("garbage.stl", rng.bytes(3000), error=r"not a readable mesh \(format stl")
+    text("garbage.obj", b"\xff\xfe" + rng.bytes(2000), error=r"not a readable mesh \(format obj")
+    text("garbage.ply", b"ply\nformat binary_little_endian 1.0\n" + rng.bytes(500), error=r"not a readable mesh")
+    good = trimesh.creation.icosphere(subdivisions=2, radius=0.03)
+    data = good.export(file_type="stl")
+    text("truncated.stl", data[: len(data) // 2], error=r"not a readable mesh \(format stl")
+    data = good.export(file_type="ply")
+    text("truncated.ply", data[: len(data) // 2], error=r"not a readable mesh \(format ply")
+    return cases
+
+
+def third_party_meshes() -> list[Path]:
+    """Robot meshes as public packages ship them: dm_control's Kinova arm and the dog's bones."""
+    import dm_control
+
+    root = Path(dm_control.__file__).parent
+    kinova = sorted((root / "third_party" / "kinova" / "meshes_decimated").glob("*.stl"))
+    bones = sorted((root / "suite" / "dog_assets").glob("BONE*.stl"))
+    bones = [p for p in bones if max(trimesh.load(p, force="mesh").extents) >= 0.01][::12]
+    return kinova + bones
+
+
+def import_case(case: Case, root: Path):
+    return import_mesh(
+        case.path,
+        set_name="corpus",
+        name=case.path.stem.replace(".", "_").lower(),
+        root=root,
+        overwrite=True,
+        **case.options,
+    )
+
+
+def third_party_cases() -> list[Case]:
+    """`third_party_meshes` with their expected outcomes: the Kinova hand's main shell and its insert
+    are each open where the other closes them (one 52 mm opening), everything else imports."""
+    cases = []
+    for path in third_party_meshes():
+        error = (
+            r"not watertight: 1 hole up to 52 mm" if path.stem in {"hand_3finger_main", "hand_3finger_insert"} else None
+        )
+        cases.append(Case(f"{path.parent.name}/{path.name}", path, error=error))
+    return cases
+
+
+with tempfile.TemporaryDirectory() as _folder:
+    CORPUS_NAMES = [case.name for case in build_corpus(Path(_folder))]
+
+
+@pytest.fixture(scope="module")
+def corpus(tmp_path_factory) -> dict[str, Case]:
+    return {case.name: case for case in build_corpus(tmp_path_factory.mktemp("corpus"))}
+
+
+def _leftovers(root: Path) -> list[Path]:
+    return sorted(p for p in root.rglob("*") if p.name.startswith(".")) if root.exists() else []
+
+
+def check_case(case: Case, root: Path) -> str:
+    """Import `case` under `root` and check its outcome; returns 'ok' or the error message."""
+    if case.error is not None:
+        with pytest.raises(InputError, match=case.error) as info:
+            import_case(case, root)
+        message = str(info.value)
+        assert "\n" not in message and str(case.path) in message, message
+        assert not (root / "corpus" / case.path.stem.lower()).exists()
+        assert not _leftovers(root), _leftovers(root)
+        return message
+    record = import_case(case, root)
+    mesh = record.mesh()
+    assert mesh.is_watertight and mesh.is_winding_consistent and len(mesh.split(only_watertight=False)) == 1
+    assert record.parts and record.stable_poses and record.volume > 0
+    if case.volume is not None:
+        assert record.volume == pytest.approx(case.volume, rel=2e-3), case.name
+    repairs = record.params["repairs"]
+    if case.warning is not None:
+        assert any(re.search(case.warning, note) for note in repairs), repairs
+    assert not _leftovers(root), _leftovers(root)
+    return "ok"
+
+
+@pytest.mark.parametrize("name", CORPUS_NAMES)
+def test_corpus_mesh_imports_or_names_its_defect(corpus, name, tmp_path):
+    check_case(corpus[name], tmp_path / "objs")
+
+
+def test_each_defect_class_has_its_own_message(corpus, tmp_path):
+    messages = {}
+    for name in ("hemisphere.stl", "self_intersecting.stl", "two_apart.stl", "garbage.stl", "big_in_mm.stl"):
+        messages[name] = check_case(corpus[name], tmp_path / "objs").split("': ", 1)[1]
+    firsts = [m.split(" ")[0:2] for m in messages.values()]
+    assert len({tuple(f) for f in firsts}) == len(firsts), messages
+
+
+def test_repairs_are_recorded_and_can_be_refused(corpus, tmp_path):
+    record = import_case(corpus["touching_table.stl"], tmp_path / "objs")
+    assert record.params["repairs"] == ["5 pieces that touch face to face united into one body"]
+    assert record.params["units"] == "m" and record.params["scale"] == 1.0
+    case = corpus["duplicated_faces.stl"]
+    with pytest.raises(InputError, match=r"needs repair \(40 duplicated faces removed\).*--no-repair"):
+        import_mesh(case.path, set_name="corpus", name="strict", root=tmp_path / "objs", try_repair=False)
+    # merging seams is reading, not repairing: a textured OBJ imports even without repairs
+    seams = import_mesh(
+        corpus["seams_box.obj"].path, set_name="corpus", name="seams", root=tmp_path / "objs", try_repair=False
+    )
+    assert seams.params["repairs"] == [] and seams.faces == 12
+
+
+def test_scale_and_units_combine(corpus, tmp_path):
+    record = import_mesh(
+        corpus["part_in.stl"].path, set_name="corpus", name="half", units="in", scale=0.5, root=tmp_path / "objs"
+    )
+    assert record.scale == pytest.approx(0.0127) and record.extents == pytest.approx([0.0254, 0.01905, 0.0127])
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(InputError, match="scale"):
+            import_mesh(corpus["part_in.stl"].path, set_name="corpus", name="bad", scale=bad, root=tmp_path / "objs")
+    with pytest.raises(InputError, match="units 'ft' is unknown"):
+        import_mesh(corpus["part_in.stl"].path, set_name="corpus", name="bad", units="ft", root=tmp_path / "objs")
+
+
+# -- the repair pieces ----------------------------------------------------------------------------
+
+
+def test_winding_numbers_are_one_inside_and_zero_outside():
+    from suctionbench.objects.repair import doubled_share, winding_numbers
+
+    box = _box((0.04, 0.02, 0.01))
+    points = np.array([[0.0, 0.0, 0.0], [0.019, 0.009, 0.004], [0.03, 0.0, 0.0], [0.0, 0.0, -0.02]])
+    assert winding_numbers(box, points) == pytest.approx([1.0, 1.0, 0.0, 0.0], abs=1e-9)
+    assert doubled_share(box) == 0.0
+    twice = trimesh.util.concatenate([box, box.copy()])
+    assert winding_numbers(twice, points[:1]) == pytest.approx([2.0])
+    assert doubled_share(twice) == pytest.approx(1.0, abs=0.05)
+
+
+def test_touching_pieces_separate_into_closed_bodies():
+    from suctionbench.objects.repair import bodies, merge_by_position
+
+    # two cubes sharing a face (written with the same diagonal: opposite duplicate triangles) and a
+    # third sharing only an edge with the second
+    cubes = [_box((0.02,) * 3), _box((0.02,) * 3, (0.02, 0, 0)), _box((0.02,) * 3, (0.04, 0.02, 0))]
+    mesh = merge_by_position(trimesh.util.concatenate(cubes))
+    groups, nonmanifold, cut = bodies(mesh)
+    assert [len(g) for g in groups] == [12, 12, 12] and nonmanifold > 0 and cut == 0
+    for group in groups:
+        body = trimesh.Trimesh(mesh.vertices, mesh.faces[group])
+        assert body.is_watertight and body.volume == pytest.approx(0.02**3)
+
+
+# -- CoACD in a child process ---------------------------------------------------------------------
+
+
+def _aborting_child(job, result):
+    return [sys.executable, "-c", "import os; os.abort()"]
+
+
+def test_coacd_crash_is_a_clean_input_error_with_nothing_left(corpus, tmp_path, monkeypatch):
+    from suctionbench.objects import decompose
+
+    monkeypatch.setattr(decompose, "_child_command", _aborting_child)
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    (tmp_path / "tmp").mkdir()
+    root = tmp_path / "objs"
+    # concave (an L bracket): its hull would add phantom material, so no fallback
+    with pytest.raises(InputError, match=r"convex decomposition failed .*CoACD crashed \(SIGABRT\)") as info:
+        import_case(corpus["touching_bracket.obj"], root)
+    assert str(corpus["touching_bracket.obj"].path) in str(info.value)
+    assert not root.exists() or not any(root.rglob("*"))
+    assert list((tmp_path / "tmp").iterdir()) == []
+    # convex (a box): falls back to its hull and says so
+    record = import_case(corpus["seams_box.obj"], root)
+    assert record.decomposition["method"] == "hull" and len(record.parts) == 1
+    assert "SIGABRT" in record.decomposition["failures"][0]
+    assert [p.name for p in (root / "corpus").iterdir()] == ["seams_box"]
+
+
+def test_cli_import_crash_exits_2_with_a_json_line(corpus, tmp_path):
+    """A real child that aborts (SIGABRT): the CLI process survives, prints its JSON line, exits 2."""
+    import subprocess
+
+    script = (
+        "import sys; from suctionbench.objects import decompose; "
+        "decompose._child_command = lambda job, result: [sys.executable, '-c', 'import os; os.abort()']; "
+        "from suctionbench.cli import main; sys.argv = ['suctionbench'] + sys.argv[1:]; main()"
+    )
+    path = corpus["touching_bracket.obj"].path
+    args = ["objects", "import", str(path), "--name", "bracket", "--root", str(tmp_path / "objs"), "--json"]
+    done = subprocess.run([sys.executable, "-c", script, *args], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2, done.stderr[-2000:]
+    line = json.loads(done.stdout.strip().splitlines()[-1])
+    assert not line["ok"] and "CoACD crashed (SIGABRT)" in line["error"] and str(path) in line["error"]
+    assert not (tmp_path / "objs").exists() or not any((tmp_path / "objs").rglob("*"))
+
+
+# -- real meshes from public packages -------------------------------------------------------------
+
+
+@pytest.mark.slow
+def test_third_party_robot_meshes_import(tmp_path):
+    outcomes = {case.name: check_case(case, tmp_path / "objs") for case in third_party_cases()}
+    expected_ok = [c for c in third_party_cases() if c.error is None]
+    imported = [name for name, out in outcomes.items() if out == "ok"]
+    assert len(imported) == len(expected_ok) >= 20

@@ -169,8 +169,9 @@ class CameraIntrinsics:
 # length, so for a specific device load its calibrated intrinsics with `load_intrinsics_toml`.
 
 PRIMESENSE = CameraIntrinsics(
-    # FACTS section 7: the Primesense Carmine 1.08/1.09 parameters used by Dex-Net (fx = fy = 525,
-    # centred principal point) and the Carmine 1.09 short-range working range of ~0.35-1.4 m.
+    # The Primesense Carmine 1.08/1.09 parameters of Dex-Net's depth images (gqcnn's primesense
+    # intrinsics: fx = fy = 525, centred principal point) and the Carmine 1.09 short-range working
+    # range of ~0.35-1.4 m.
     name="primesense", width=640, height=480, fx=525.0, fy=525.0, cx=319.5, cy=239.5,
     min_depth=0.35, max_depth=1.4,
 )
@@ -279,6 +280,29 @@ def load_intrinsics_toml(path: str | Path) -> CameraIntrinsics:
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"camera intrinsics '{path}': not valid TOML ({exc})") from None
     return intrinsics_from_dict(data, source=str(path), default_name=path.stem or "custom")
+
+
+def intrinsics_to_toml(intrinsics: CameraIntrinsics) -> str:
+    """The TOML text `load_intrinsics_toml` reads back to `intrinsics` (a template for one's own
+    camera: `suctionbench cameras --toml NAME`)."""
+    lines = [f"# {intrinsics.name}: pinhole depth camera, OpenCV pixel-centre convention, metres"]
+    for f in fields(CameraIntrinsics):
+        value = getattr(intrinsics, f.name)
+        lines.append(f'{f.name} = "{value}"' if isinstance(value, str) else f"{f.name} = {value!r}")
+    return "\n".join(lines) + "\n"
+
+
+def camera_summary(intrinsics: CameraIntrinsics) -> dict[str, Any]:
+    """One row of `suctionbench cameras`: resolution, focal lengths, principal point, field of
+    view (deg) and working range (m)."""
+    hfov, vfov = intrinsics.fov
+    return {
+        "name": intrinsics.name, "width": intrinsics.width, "height": intrinsics.height,
+        "fx": intrinsics.fx, "fy": intrinsics.fy, "cx": intrinsics.cx, "cy": intrinsics.cy,
+        "hfov_deg": round(math.degrees(hfov), 1), "vfov_deg": round(math.degrees(vfov), 1),
+        "min_depth": intrinsics.min_depth, "max_depth": intrinsics.max_depth,
+        "default": intrinsics.name == DEFAULT_CAMERA,
+    }
 
 
 def resolve_camera(spec: str | Path) -> CameraIntrinsics:

@@ -151,23 +151,28 @@ def stable_poses(mesh: trimesh.Trimesh, com: np.ndarray) -> list[dict[str, Any]]
     ]
 
 
-def convex_parts(mesh: trimesh.Trimesh, threshold: float, max_hulls: int, seed: int = 0) -> list[trimesh.Trimesh]:
+def convex_parts(
+    mesh: trimesh.Trimesh, threshold: float, max_hulls: int, seed: int = 0, options: dict | None = None
+) -> list[trimesh.Trimesh]:
     """Convex decomposition with CoACD (MuJoCo collides meshes by their convex hulls), run in a child
     process (suctionbench.objects.decompose) so that a native crash raises CoacdFailed here."""
-    raw = run_coacd(np.asarray(mesh.vertices), np.asarray(mesh.faces), threshold, max_hulls, seed)
+    raw = run_coacd(np.asarray(mesh.vertices), np.asarray(mesh.faces), threshold, max_hulls, seed, options)
     parts = [trimesh.Trimesh(v, f, process=True).convex_hull for v, f in raw]
     return sorted(parts, key=lambda p: tuple(np.round(p.centroid, 6)))
 
 
-def decompose_mesh(mesh: trimesh.Trimesh, source: str = "mesh") -> tuple[list[trimesh.Trimesh], dict[str, Any]]:
-    """Convex parts following COACD_SCHEDULE, and how well they fit (the last try if none fits).
+def decompose_mesh(
+    mesh: trimesh.Trimesh, source: str = "mesh", schedule=COACD_SCHEDULE, options: dict | None = None
+) -> tuple[list[trimesh.Trimesh], dict[str, Any]]:
+    """Convex parts following `schedule`, and how well they fit (the last try if none fits); `options`
+    are further CoACD keywords (imports use decompose.IMPORT_SCHEDULE and IMPORT_OPTIONS).
 
     A CoACD run that crashes moves on to the next threshold; if every run crashes, a convex object
     (hull within EXCESS_MAX of its volume) falls back to its hull, anything else is an InputError."""
     best, failures = None, []
-    for threshold, max_hulls in COACD_SCHEDULE:
+    for threshold, max_hulls in schedule:
         try:
-            parts = convex_parts(mesh, threshold, max_hulls)
+            parts = convex_parts(mesh, threshold, max_hulls, options=options)
         except CoacdFailed as exc:
             failures.append(f"threshold {threshold:g}: {exc}")
             continue
@@ -205,8 +210,12 @@ def build_object(
     scale: float = 1.0,
     mass: float | None = None,
     decompose: bool = True,
+    coacd: tuple[tuple[tuple[float, int], ...], dict] | None = None,
 ) -> ObjectRecord:
-    """Build an object directory at `out_dir` (replaced atomically) and return its record."""
+    """Build an object directory at `out_dir` (replaced atomically) and return its record.
+
+    `coacd`: (schedule, options) for the convex decomposition instead of COACD_SCHEDULE and CoACD's
+    defaults (see `decompose_mesh`)."""
     mesh = prepare_mesh(mesh, source=source if source != "generated" else spec.name)
     com = np.asarray(mesh.center_mass, dtype=float)
     if mass is None:
@@ -238,7 +247,8 @@ def build_object(
         parts=[],
     )
     if decompose:  # before any folder exists: a failure leaves nothing behind
-        parts, record.decomposition = decompose_mesh(mesh, source=source)
+        schedule, options = coacd or (COACD_SCHEDULE, None)
+        parts, record.decomposition = decompose_mesh(mesh, source, schedule, options)
     out_dir = Path(out_dir)
     try:
         out_dir.parent.mkdir(parents=True, exist_ok=True)

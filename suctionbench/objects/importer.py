@@ -9,6 +9,7 @@ from pathlib import Path
 from suctionbench.errors import InputError
 from suctionbench.geometry.mesh import load_mesh
 from suctionbench.objects.build import ObjectRecord, build_object
+from suctionbench.objects.decompose import IMPORT_OPTIONS, IMPORT_SCHEDULE
 from suctionbench.objects.registry import set_dir
 from suctionbench.objects.repair import solidify
 from suctionbench.objects.spec import SETS, ObjectSpec
@@ -52,4 +53,13 @@ def import_mesh(
         raise InputError(f"mesh '{path}': needs repair ({solid.notes[0]}) and repairs are off (--no-repair)")
     params = {"units": units, "scale": float(scale), "repairs": solid.notes}
     spec = ObjectSpec(name=name, set=set_name, generator="import", params=params, description=f"imported from {path}")
-    return build_object(solid.mesh, spec, out_dir, source=str(path), units=units, scale=scale, mass=mass)
+    return build_object(
+        solid.mesh,
+        spec,
+        out_dir,
+        source=str(path),
+        units=units,
+        scale=scale,
+        mass=mass,
+        coacd=(IMPORT_SCHEDULE, IMPORT_OPTIONS),
+    )

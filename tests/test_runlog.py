@@ -168,21 +168,98 @@ def test_grasps_without_quality_or_choice(tmp_path):
 
 
 def _check_foxglove_json_schema(schema: dict, where: str) -> None:
-    """The subset of JSON Schema that Foxglove's parser (mcap-support parseJsonSchema) accepts."""
+    """The subset of JSON Schema that Foxglove's parser (mcap-support parseJsonSchema) accepts: one
+    type per field (or an enum as ``oneOf`` of numeric ``const``), ``properties`` on every object,
+    no arrays of arrays, bytes as base64 strings."""
     assert schema.get("type") == "object" and isinstance(schema.get("properties"), dict), where
     for name, field in schema["properties"].items():
         here = f"{where}.{name}"
+        if "oneOf" in field:
+            assert all(isinstance(option.get("const"), int) for option in field["oneOf"]), here
+            continue
         kind = field.get("type")
         assert kind in {"boolean", "string", "number", "integer", "object", "array"}, here
         if kind == "object":
             _check_foxglove_json_schema(field, here)
         if kind == "array":
-            item_kind = field["items"].get("type")
+            items = field["items"]
+            if "oneOf" in items:
+                assert all(isinstance(option.get("const"), int) for option in items["oneOf"]), here
+                continue
+            item_kind = items.get("type")
             assert item_kind in {"boolean", "string", "number", "integer", "object"}, here
             if item_kind == "object":
-                _check_foxglove_json_schema(field["items"], here)
+                _check_foxglove_json_schema(items, here)
         if kind == "string":
             assert field.get("contentEncoding") in {None, "base64"}, here
+
+
+def _validate_every_message(path) -> dict[str, int]:
+    """Validate each message of the log at `path` against its embedded JSON Schema and, for foxglove.*
+    schemas, against Foxglove's published schema; returns messages checked per schema name."""
+    jsonschema = pytest.importorskip("jsonschema")
+    from suctionbench.runlog.writer import SCHEMA_DIR
+
+    checked: dict[str, int] = {}
+    with open(path, "rb") as f:
+        reader = make_reader(f, validate_crcs=True)
+        validators = {}
+        for schema_id, schema in reader.get_summary().schemas.items():
+            embedded = json.loads(schema.data)
+            jsonschema.Draft202012Validator.check_schema(embedded)
+            validators[schema_id] = [jsonschema.Draft202012Validator(embedded)]
+            if schema.name.startswith("foxglove."):
+                published = json.loads((SCHEMA_DIR / f"{schema.name}.json").read_text())
+                assert embedded == published, f"{schema.name}: embedded schema is not the published one"
+                assert published["required"], schema.name
+                validators[schema_id].append(jsonschema.Draft202012Validator(published))
+        for schema, channel, message in reader.iter_messages():
+            data = json.loads(message.data)
+            for validator in validators[schema.id]:
+                errors = sorted(validator.iter_errors(data), key=str)
+                assert not errors, f"{channel.topic} ({schema.name}) at {message.log_time}: {errors[0].message}"
+            checked[schema.name] = checked.get(schema.name, 0) + 1
+    return checked
+
+
+def test_every_message_is_valid_against_the_published_schemas(episode):
+    path, _, _ = episode
+    checked = _validate_every_message(path)
+    assert checked["foxglove.SceneUpdate"] == 1 and checked["foxglove.FrameTransforms"] == N_STATES + 1
+    assert sum(checked.values()) == 6 + (N_STATES + 1) + 2 * N_STATES  # every message of the log
+
+
+def test_a_real_pick_log_is_valid_against_the_published_schemas(tmp_path):
+    from suctionbench.sim.pick import PickRequest, PickRunner
+
+    path = tmp_path / "pick.mcap"
+    PickRunner(PickRequest("basic/box_tea", policy="planarity-centroid", seed=4)).run(log=path)
+    checked = _validate_every_message(path)
+    for name in ("foxglove.RawImage", "foxglove.CameraCalibration", "foxglove.FrameTransforms", "foxglove.SceneUpdate"):
+        assert checked.get(name, 0) >= 1, (name, checked)
+    [(_, scene)] = list(iter_messages(path, "/grasps/candidates"))[:1]
+    entity = scene["entities"][0]
+    assert entity["arrows"] and all(entity[k] == [] for k in ("cubes", "spheres", "cylinders", "lines", "texts"))
+
+
+def test_a_wrong_message_fails_the_published_schema():
+    """The check above can fail: an entity without its empty arrays (the old logs) is rejected."""
+    jsonschema = pytest.importorskip("jsonschema")
+    from suctionbench.runlog.writer import SCHEMAS
+
+    stamp = {"sec": 0, "nsec": 0}
+    entity = {
+        "timestamp": stamp,
+        "frame_id": "world",
+        "id": "x",
+        "lifetime": stamp,
+        "frame_locked": False,
+        "metadata": [],
+        "arrows": [],
+    }
+    validator = jsonschema.Draft202012Validator(SCHEMAS["foxglove.SceneUpdate"])
+    errors = list(validator.iter_errors({"deletions": [], "entities": [entity]}))
+    assert {e.message for e in errors} >= {"'cubes' is a required property", "'models' is a required property"}
 
 
 def test_plain_mcap_reader_sees_foxglove_schemas(episode):
@@ -203,8 +280,20 @@ def test_plain_mcap_reader_sees_foxglove_schemas(episode):
         assert all(n.startswith("suctionbench.") for t, n in names.items() if not n.startswith("foxglove."))
         raw_image = json.loads(schemas["/camera/depth"].data)
         assert raw_image["properties"]["data"]["contentEncoding"] == "base64"
-        [meta] = list(reader.iter_metadata())
-        assert meta.name == "suctionbench" and json.loads(meta.metadata["seed"]) == 7
+        records = {meta.name: meta.metadata for meta in reader.iter_metadata()}
+        assert set(records) == {"suctionbench", "suctionbench.types"}
+        # plain strings: a string is itself, not JSON text ("planarity-centroid", not "\"planarity-centroid\"")
+        assert records["suctionbench"]["policy"] == "planarity-centroid"
+        assert (
+            records["suctionbench"]["seed"] == "7"
+            and json.loads(records["suctionbench"]["config"]) == METADATA["config"]
+        )
+        assert records["suctionbench.types"] == {
+            "seed": "json",
+            "policy": "string",
+            "config": "json",
+            "versions": "json",
+        }
         assert sum(1 for _ in reader.iter_messages()) == summary.statistics.message_count
 
 
@@ -271,3 +360,27 @@ def test_missing_paths_raise_input_error(tmp_path):
         read_run(tmp_path / "nope")
     with pytest.raises(InputError, match="is a directory"):
         read_episode(tmp_path)
+
+
+def test_logs_with_json_text_metadata_still_read(tmp_path):
+    """Logs written before the plain-string metadata (every value JSON text, no types record)."""
+    from mcap.writer import Writer
+
+    path = tmp_path / "old.mcap"
+    with open(path, "wb") as f:
+        writer = Writer(f)
+        writer.start(profile="", library="suctionbench 0.1.0")
+        writer.add_metadata(
+            "suctionbench", {"suctionbench_version": '"0.1.0"', "seed": "3", "cup": '{"radius": 0.015}'}
+        )
+        writer.finish()
+    assert read_episode(path)["metadata"] == {"suctionbench_version": "0.1.0", "seed": 3, "cup": {"radius": 0.015}}
+    new = tmp_path / "new.mcap"
+    with EpisodeLog(new, {"suctionbench_version": "0.1.0", "seed": 3, "cup": {"radius": 0.015}, "tag": "7"}):
+        pass
+    assert read_episode(new)["metadata"] == {
+        "suctionbench_version": "0.1.0",
+        "seed": 3,
+        "cup": {"radius": 0.015},
+        "tag": "7",
+    }  # a string that looks like JSON stays a string

@@ -4,13 +4,15 @@ Why MCAP + JSON, written with the plain `mcap` package
 -----------------------------------------------------
 Every channel is ``message_encoding="json"`` with a ``jsonschema`` schema. Where a Foxglove
 well-known schema exists (``foxglove.RawImage``, ``foxglove.CameraCalibration``,
-``foxglove.FrameTransforms``, ``foxglove.SceneUpdate``) the channel carries that schema name and a
-JSON Schema with the same field names as Foxglove's published one, so Foxglove's Image and 3D
-panels render it directly; bytes fields (the depth image) are base64 strings tagged
-``contentEncoding: base64``, which is how Foxglove reads bytes in JSON. Our own records (joint
-states, grasp table, suction state, episode result) are ``suctionbench.*`` JSON schemas. All
-schemas stay inside the JSON Schema subset that Foxglove's parser accepts (one type per field,
-``properties`` on every object, no arrays of arrays).
+``foxglove.FrameTransforms``, ``foxglove.SceneUpdate``) the channel carries that schema name and
+Foxglove's *published* JSON Schema, vendored unchanged from the ``@foxglove/schemas`` npm package
+(``runlog/schemas/``, version and licence in its README), and every message satisfies it, required
+fields included, so strict consumers (the TypeScript ``@foxglove/schemas`` + ajv, Python
+``jsonschema``) accept the log and Foxglove's Image and 3D panels render it directly; bytes fields
+(the depth image) are base64 strings tagged ``contentEncoding: base64``, which is how Foxglove
+reads bytes in JSON. Our own records (joint states, grasp table, suction state, episode result) are
+``suctionbench.*`` JSON schemas in the same style (one type per field, ``properties`` on every
+object, ``required`` for what is always there).
 
 The alternatives were weighed and rejected:
 
@@ -34,7 +36,9 @@ nanoseconds, so a log replays the episode at the speed of the simulation, indepe
 fast the host computed it. Message ``timestamp`` fields carry the same time.
 
 Run metadata (config, versions, seed, ...) is an MCAP metadata record named ``suctionbench``
-whose values are JSON text (``mcap`` metadata is string -> string), decoded again by the reader.
+with plain string values (``mcap`` metadata is string -> string): strings as themselves, numbers,
+booleans and tables as JSON text; a record ``suctionbench.types`` says which is which, and the
+reader restores the types (logs written before it, all JSON text, still read).
 """
 
 from suctionbench.runlog.reader import depth_image, grasp_table, iter_messages, read_episode, read_run

@@ -25,7 +25,7 @@ from mcap.records import Channel, Message
 from mcap.summary import Summary
 
 from suctionbench.errors import InputError
-from suctionbench.runlog.writer import METADATA_NAME, TOPIC_RESULT
+from suctionbench.runlog.writer import METADATA_NAME, METADATA_TYPES_NAME, TOPIC_RESULT
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 """Starts and ends every complete MCAP file."""
@@ -78,8 +78,12 @@ def _decode(channel: Channel, message: Message) -> Any:
     return json.loads(message.data)
 
 
-def _decode_metadata_value(text: str) -> Any:
-    """Values are JSON text (see `EpisodeLog`); a plain string from another writer stays as is."""
+def _decode_metadata_value(text: str, kind: str | None) -> Any:
+    """A metadata value back to its type: "string" values are the text itself, "json" ones JSON text
+    (see `EpisodeLog`). Logs before the types record (kind None) wrote every value as JSON text;
+    a value that is not JSON (another writer's plain string) stays as it is."""
+    if kind == "string":
+        return text
     try:
         return json.loads(text)
     except ValueError:
@@ -95,10 +99,9 @@ def read_episode(path: str | os.PathLike) -> dict[str, Any]:
         none), message counts per topic, and the span of log (= simulated) times in seconds.
     """
     with _open(path) as (reader, summary):
-        metadata: dict[str, Any] = {}
-        for record in reader.iter_metadata():
-            if record.name == METADATA_NAME:
-                metadata.update({k: _decode_metadata_value(v) for k, v in record.metadata.items()})
+        records = {record.name: record.metadata for record in reader.iter_metadata()}
+        types = records.get(METADATA_TYPES_NAME, {})
+        metadata = {k: _decode_metadata_value(v, types.get(k)) for k, v in records.get(METADATA_NAME, {}).items()}
         result = None
         for _, channel, message in reader.iter_messages(topics=[TOPIC_RESULT], log_time_order=True, reverse=True):
             result = _decode(channel, message)

@@ -27,6 +27,10 @@ from suctionbench.geometry.frames import approach_frames
 METADATA_NAME = "suctionbench"
 """Name of the MCAP metadata record holding the run metadata."""
 
+METADATA_TYPES_NAME = "suctionbench.types"
+"""Name of the metadata record that says, per key of METADATA_NAME, how its value is written:
+"string" (the text itself) or "json" (numbers, booleans, null, lists and tables as JSON text)."""
+
 WORLD_FRAME = "world"
 """Root frame of every transform on /tf."""
 
@@ -50,20 +54,45 @@ ARROW_HEAD_DIAMETER = 0.005
 CHOSEN_ARROW_SCALE = 2.0
 """The chosen grasp is drawn this many times thicker than the other candidates."""
 NO_QUALITY_COLOR = {"r": 0.6, "g": 0.6, "b": 0.6, "a": 1.0}
+SCENE_PRIMITIVES = ("arrows", "cubes", "spheres", "cylinders", "lines", "triangles", "texts", "models")
+"""The primitive arrays of a foxglove.SceneEntity (all required by the published schema)."""
 """Colour of candidates without a quality (q is None or NaN)."""
 
 
 # --------------------------------------------------------------------------------------------
-# JSON Schemas. Foxglove identifies well-known types by the schema *name*; the JSON Schema body
-# tells it which strings are base64 bytes and gives field names for message-path completion, so
-# we describe exactly the fields we write, with Foxglove's field names. Foxglove's parser takes
-# only a subset of JSON Schema: one "type" per field, "properties" on every object, no arrays of
-# arrays -- hence points as {x, y, z} objects (tests/test_runlog.py checks every schema).
+# JSON Schemas. Foxglove identifies well-known types by the schema *name* and checks messages
+# against its published JSON Schemas, whose `required` lists every field (a SceneEntity must carry
+# all its primitive arrays, even empty). The foxglove.* schemas are those published schemas,
+# vendored unchanged from the `@foxglove/schemas` npm package (see schemas/README.md), and every
+# message below is written to satisfy them (tests/test_runlog.py validates each message of a real
+# pick log with jsonschema). Our own records are suctionbench.* schemas in the same style: one type
+# per field, "properties" on every object, `required` for what is always there.
 # --------------------------------------------------------------------------------------------
 
+SCHEMA_DIR = Path(__file__).parent / "schemas"
+"""The vendored Foxglove JSON Schemas (foxglove.NAME.json)."""
 
-def _obj(**properties: dict) -> dict:
-    return {"type": "object", "properties": properties}
+FOXGLOVE_SCHEMAS_VERSION = "@foxglove/schemas 2.1.0"
+"""Where the vendored foxglove.* schemas come from."""
+
+FOXGLOVE_SCHEMAS = (
+    "foxglove.RawImage",
+    "foxglove.CameraCalibration",
+    "foxglove.FrameTransforms",
+    "foxglove.SceneUpdate",
+)
+"""The well-known Foxglove types a log uses."""
+
+
+def _foxglove(name: str) -> dict:
+    return json.loads((SCHEMA_DIR / f"{name}.json").read_text())
+
+
+def _obj(required: bool = True, **properties: dict) -> dict:
+    schema = {"type": "object", "properties": properties}
+    if required:
+        schema["required"] = list(properties)
+    return schema
 
 
 def _array(items: dict) -> dict:
@@ -74,64 +103,30 @@ _NUM = {"type": "number"}
 _INT = {"type": "integer"}
 _STR = {"type": "string"}
 _BOOL = {"type": "boolean"}
-_TIME = _obj(sec=_INT, nsec=_INT)
+_TIME = _obj(sec={"type": "integer", "minimum": 0}, nsec={"type": "integer", "minimum": 0, "maximum": 999_999_999})
 _VEC3 = _obj(x=_NUM, y=_NUM, z=_NUM)
-_QUAT = _obj(x=_NUM, y=_NUM, z=_NUM, w=_NUM)
-_COLOR = _obj(r=_NUM, g=_NUM, b=_NUM, a=_NUM)
-_POSE = _obj(position=_VEC3, orientation=_QUAT)
-_FRAME_TRANSFORM = _obj(timestamp=_TIME, parent_frame_id=_STR, child_frame_id=_STR, translation=_VEC3, rotation=_QUAT)
-_ARROW = _obj(
-    pose=_POSE,
-    shaft_length=_NUM,
-    shaft_diameter=_NUM,
-    head_length=_NUM,
-    head_diameter=_NUM,
-    color=_COLOR,
-)
-_SCENE_ENTITY = _obj(
-    timestamp=_TIME,
-    frame_id=_STR,
-    id=_STR,
-    lifetime=_TIME,
-    frame_locked=_BOOL,
-    metadata=_array(_obj(key=_STR, value=_STR)),
-    arrows=_array(_ARROW),
-)
 
 # Optional fields ("q" without qualities, "chosen_index" without a choice) are left out rather
 # than null, because Foxglove's JSON Schema parser accepts only one type per field.
-_GRASP_CANDIDATE = _obj(index=_INT, point=_VEC3, approach=_VEC3, q=_NUM)
+_GRASP_CANDIDATE = _obj(index=_INT, point=_VEC3, approach=_VEC3, q=_NUM) | {"required": ["index", "point", "approach"]}
 
 SCHEMAS: dict[str, dict] = {
-    "foxglove.RawImage": _obj(
-        timestamp=_TIME,
-        frame_id=_STR,
-        width=_INT,
-        height=_INT,
-        encoding=_STR,
-        step=_INT,
-        data={"type": "string", "contentEncoding": "base64"},
-    ),
-    "foxglove.CameraCalibration": _obj(
-        timestamp=_TIME,
-        frame_id=_STR,
-        width=_INT,
-        height=_INT,
-        distortion_model=_STR,
-        D=_array(_NUM),
-        K=_array(_NUM),
-        R=_array(_NUM),
-        P=_array(_NUM),
-    ),
-    "foxglove.FrameTransforms": _obj(transforms=_array(_FRAME_TRANSFORM)),
-    "foxglove.SceneUpdate": _obj(
-        deletions=_array(_obj(timestamp=_TIME, type=_INT, id=_STR)), entities=_array(_SCENE_ENTITY)
-    ),
+    **{
+        name: _foxglove(name)
+        for name in (
+            "foxglove.RawImage",
+            "foxglove.CameraCalibration",
+            "foxglove.FrameTransforms",
+            "foxglove.SceneUpdate",
+        )
+    },
     "suctionbench.JointStates": _obj(timestamp=_TIME, names=_array(_STR), positions=_array(_NUM)),
     "suctionbench.GraspTable": _obj(
         timestamp=_TIME, frame_id=_STR, chosen_index=_INT, candidates=_array(_GRASP_CANDIDATE)
-    ),
-    "suctionbench.ChosenGrasp": _obj(timestamp=_TIME, frame_id=_STR, **_GRASP_CANDIDATE["properties"]),
+    )
+    | {"required": ["timestamp", "frame_id", "candidates"]},
+    "suctionbench.ChosenGrasp": _obj(timestamp=_TIME, frame_id=_STR, **_GRASP_CANDIDATE["properties"])
+    | {"required": ["timestamp", "frame_id", "index", "point", "approach"]},
     "suctionbench.Suction": _obj(timestamp=_TIME, vacuum_on=_BOOL, sealed=_BOOL, compression=_NUM),
     # Free-form record: Foxglove needs "properties" on every object, even an open one.
     "suctionbench.EpisodeResult": {"type": "object", "properties": {}, "description": "The episode's outcome."},
@@ -176,6 +171,17 @@ def jsonable(value: Any) -> Any:
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return jsonable(dataclasses.asdict(value))
     raise TypeError(f"cannot log a value of type {type(value).__name__} as JSON: {value!r:.80}")
+
+
+def metadata_record(metadata: Mapping[str, Any]) -> tuple[dict[str, str], dict[str, str]]:
+    """MCAP metadata (string -> string) for `metadata`, and the record of each value's encoding."""
+    record, types = {}, {}
+    for key, value in metadata.items():
+        value = jsonable(value)
+        plain = isinstance(value, str)
+        record[str(key)] = value if plain else json.dumps(value, allow_nan=False)
+        types[str(key)] = "string" if plain else "json"
+    return record, types
 
 
 def seconds_to_ns(t: float) -> int:
@@ -225,14 +231,16 @@ class EpisodeLog:
         path: destination ``.mcap`` file; its parent directories are created; an existing file
             is replaced on close.
         metadata: run metadata (config, versions, seed, ...); stored as the MCAP metadata record
-            ``"suctionbench"``, each value as JSON text. (The writing suctionbench version is
-            also in the MCAP header's ``library`` field.)
+            ``"suctionbench"`` with plain string values: a string as itself, anything else as
+            JSON text (``7``, ``true``, ``{"radius": 0.015}``), and a second record
+            ``"suctionbench.types"`` naming which is which so the reader restores the types.
+            (The writing suctionbench version is also in the MCAP header's ``library`` field.)
     """
 
     def __init__(self, path: str | os.PathLike, metadata: Mapping[str, Any]):
         self.path = Path(path)
         # Serialise before touching the disk, so bad metadata leaves nothing behind.
-        record = {str(k): json.dumps(jsonable(v)) for k, v in metadata.items()}
+        record, types = metadata_record(metadata)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._tmp_path = self.path.with_name(f".{self.path.name}.{uuid.uuid4().hex[:8]}.part")
         self._schema_ids: dict[str, int] = {}
@@ -243,6 +251,7 @@ class EpisodeLog:
             self._writer = Writer(self._file)
             self._writer.start(profile="", library=f"suctionbench {__version__}")
             self._writer.add_metadata(METADATA_NAME, record)
+            self._writer.add_metadata(METADATA_TYPES_NAME, types)
         except BaseException:
             self.abort()
             raise
@@ -294,7 +303,7 @@ class EpisodeLog:
             schema_name = TOPIC_SCHEMAS[topic]
             schema_id = self._schema_ids.get(schema_name)
             if schema_id is None:
-                schema = dict(SCHEMAS[schema_name], title=schema_name)
+                schema = {"title": schema_name, **SCHEMAS[schema_name]}
                 schema_id = self._writer.register_schema(
                     name=schema_name, encoding="jsonschema", data=json.dumps(schema).encode()
                 )
@@ -486,7 +495,10 @@ def _grasp_arrows(points: np.ndarray, approaches: np.ndarray, q: np.ndarray | No
 
 
 def _entity(stamp: dict[str, int], frame_id: str, entity_id: str, arrows: list[dict]) -> dict[str, Any]:
-    """A SceneEntity that persists until the next update (zero lifetime) and is fixed in the world."""
+    """A SceneEntity that persists until the next update (zero lifetime) and is fixed in the world.
+
+    It holds only arrows, but the published schema requires every primitive array, so the others
+    are there, empty."""
     return {
         "timestamp": stamp,
         "frame_id": frame_id,
@@ -495,4 +507,5 @@ def _entity(stamp: dict[str, int], frame_id: str, entity_id: str, arrows: list[d
         "frame_locked": False,
         "metadata": [],
         "arrows": arrows,
+        **{kind: [] for kind in SCENE_PRIMITIVES if kind != "arrows"},
     }

@@ -135,3 +135,33 @@ def test_report_renders_in_headless_chromium(smoke_report, tmp_path):
     dark = pixels < 100
     assert 0.002 < dark.mean() < 0.3  # neither blank nor a black page
     assert dark[:300].any(axis=1).sum() > 20  # the heading and the first table at the top
+
+
+def test_report_opens_with_the_headline_figure_and_ends_with_command_and_versions(smoke_report):
+    from suctionbench.evaluation.runner import run_records
+
+    report, out = smoke_report
+    page = (out / "index.html").read_text()
+    assert report["figures"][0] == "headline.png"
+    assert page.index('src="headline.png"') < page.index("<table>")  # the figure comes before the tables
+    headline = np.asarray(Image.open(out / "headline.png").convert("RGB"), dtype=int)
+    assert (np.abs(headline - (76, 120, 168)).sum(axis=-1) < 30).any()  # a success bar (#4C78A8)
+    assert (headline.sum(axis=-1) < 30).any()  # the paper's black markers (centroid: 92 % on basic)
+    # every object of the run has a card: its thumbnail beside its successes / trials
+    records = [r for r in run_records(out.parent / "run") if r.get("valid")]
+    expected = {}
+    for r in records:
+        s, n = expected.get(r["object"], (0, 0))
+        expected[r["object"]] = (s + bool(r["success"]), n + 1)
+    cards = re.findall(r'<figure class="object"><img src="(object_[^"]+\.png)"[^>]*><figcaption><b>([^<]+)</b>'
+                       r"<br>centroid / [a-z]+: (\d+)/(\d+)</figcaption>", page)
+    assert {key: (int(s), int(n)) for _, key, s, n in cards} == expected
+    for image, *_ in cards:
+        thumb = np.asarray(Image.open(out / image).convert("RGB"))
+        assert thumb.shape == (96, 96, 3) and (thumb < 200).any() and (thumb == 255).all(axis=-1).any()
+    footer = page[page.index("<footer>"):]
+    assert "Versions: suctionbench" in footer and "mujoco 3." in footer and "seed 0" in footer
+    assert "Report: <code>" in footer
+    assert "FACTS" not in page and "shared/" not in page and "Mahler et al." in page
+    markdown = (out / "report.md").read_text()
+    assert markdown.index("headline.png") < markdown.index("| policy |") < markdown.index("## Runs and versions")

@@ -1,10 +1,15 @@
-"""Reports built from run directories (their MCAP logs), never from memory: the side-by-side table
-(policies x sets), precision-recall and success-vs-attempt-rate curves, a per-object breakdown,
-a gallery of failures (depth crop around the executed grasp), and the paper's numbers beside ours."""
+"""Reports built from run directories (their MCAP logs), never from memory: a headline figure
+(success and AP per policy and set beside the paper's physical results), the side-by-side tables
+(policies x sets, known objects, the pick cycle), precision-recall and success-vs-attempt-rate
+curves, per-object counts beside a thumbnail of each object, a gallery of failures (depth crop
+around the executed grasp), and, at the bottom, each run's command and the software versions.
+The paper's numbers live in `suctionbench.evaluation.paper` with their source."""
 
 from __future__ import annotations
 
 import html
+import shlex
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -12,22 +17,12 @@ from typing import Any
 import numpy as np
 
 from suctionbench.errors import InputError
+from suctionbench.evaluation.paper import CITATION, PAPER_KNOWN, PAPER_RANDOM, PAPER_RESULTS
 from suctionbench.evaluation.runner import run_records, summarize_run
 from suctionbench.io import atomic_path
 
-PAPER_RESULTS = {  # FACTS.md section 5: success rate (AP) in %, Basic / Typical / Adversarial
-    "planarity": {"basic": (74, 81), "typical": (67, 69), "adversarial": (47, 48)},
-    "centroid": {"basic": (92, 89), "typical": (78, 80), "adversarial": (38, 47)},
-    "planarity-centroid": {"basic": (94, 98), "typical": (86, 94), "adversarial": (62, 64)},
-    "gqcnn": {"basic": (98, 99), "typical": (82, 97), "adversarial": (58, 61)},
-}
-"""The paper's physical results (GQ-CNN: the Dex-Net 3.0 model) for the comparison table."""
-
-PAPER_KNOWN = {"pc3d": (88, 80), "ss": (89, 84), "wr": (93, 80), "rwr": (100, 92)}
-"""The paper's known-objects results (adversarial set, top-ranked grasp per metric): AP, success in %."""
-
-PAPER_RANDOM = {"pc3d": (71, 68, 0.36), "ss": (75, 74, 0.49), "wr": (78, 77, 0.52), "rwr": (80, 75, 0.62)}
-"""The paper's random-grasp classification (known objects): AP %, accuracy %, Spearman."""
+__all__ = ["PAPER_KNOWN", "PAPER_RANDOM", "PAPER_RESULTS", "build_report", "expand_run_dirs",
+           "success_attempt_curve"]
 
 POLICY_ORDER = ("random", "planarity", "centroid", "planarity-centroid", "gqcnn")
 """Row order of the policies x sets table (the paper's, weakest baseline first)."""
@@ -88,22 +83,29 @@ def _order(set_name: str, policy: str) -> tuple[int, int, str]:
             POLICY_ORDER.index(policy) if policy in POLICY_ORDER else len(POLICY_ORDER), policy)
 
 
+def _sum(*values: float | None) -> float | None:
+    return None if any(v is None for v in values) else round(sum(values), 4)
+
+
 def _tables(summaries: list[dict[str, Any]]) -> list[Table]:
     """The report's tables: policies x sets, known objects per metric, random-grasp
     classification per metric, and where the time of a pick goes."""
     novel = Table("Novel objects: policies x sets",
                   "AP of the policy's q against simulated success; label precision: share of simulated "
                   "successes among executed grasps the analytic label (rwr > 0.5) calls robust. Paper: "
-                  "physical YuMi trials (FACTS.md section 5).")
+                  "physical YuMi trials (Dex-Net 3.0, table \"Performance on Novel Objects\").")
     known = Table("Known objects: top-ranked grasp per 3D metric",
                   "Shape and pose known; the grasp with the highest score of the metric is executed. "
                   "AP of that score against simulated success. Paper: 75 physical trials.")
     classified = Table("Known objects: random-grasp classification",
                        "Random reachable surface grasps, each scored by every 3D metric in the true state; "
                        "AP, accuracy (score > 0.5) and Spearman rank correlation against simulated success.")
-    timing = Table("Where a pick's time goes (means per trial)",
-                   "Sensing: rendering the noisy depth image; planning: the policy's wall time; motion: "
-                   "simulated time of the approach, lift and transport. Picks per hour = success rate / cycle.")
+    timing = Table("The pick cycle (means per trial)",
+                   "Picks per hour = success rate / cycle, the cycle being the simulated motion (approach, "
+                   "lift, transport) plus a modelled compute time (one 30 Hz depth frame and the policy's "
+                   "planning time, suctionbench.evaluation.cycle), so the same seeds give the same figure. "
+                   "Measured wall times of this run (rendering the noisy depth image, planning) and the "
+                   "picks per hour they would give are reported beside it; they vary with the machine's load.")
     for s in summaries:
         label = s["label"]
         success = _percent(s["success_rate"])
@@ -130,22 +132,26 @@ def _tables(summaries: list[dict[str, Any]]) -> list[Table]:
                                "picks/hour": s["picks_per_hour"],
                                "paper success (AP) %": f"{paper[0]} ({paper[1]})" if paper else "-",
                                "success - paper (points)": _delta(success, paper and paper[0])})
-        timing.rows.append({"run": f"{label} / {s['set']}", "sensing s": s["mean_sensing_s"],
-                            "planning s": s["mean_plan_s"], "motion s": s["mean_motion_s"],
-                            "cycle s": s["mean_cycle_s"], "success %": success, "picks/hour": s["picks_per_hour"]})
+        timing.rows.append({"run": f"{label} / {s['set']}", "motion s": s["mean_motion_s"],
+                            "compute s (model)": _sum(s.get("modelled_sensing_s"), s.get("modelled_plan_s")),
+                            "cycle s": s["mean_cycle_s"], "success %": success, "picks/hour": s["picks_per_hour"],
+                            "sensing s (wall)": s["mean_sensing_s"], "planning s (wall)": s["mean_plan_s"],
+                            "picks/hour (wall)": s.get("picks_per_hour_wall")})
     novel.rows.sort(key=lambda r: _order(r["set"], r["policy"]))
     timing.rows.sort(key=lambda r: _order(*reversed(r["run"].split(" / "))))
     known.rows.sort(key=lambda r: list(PAPER_KNOWN).index(r["metric"]) if r["metric"] in PAPER_KNOWN else 0)
     return [t for t in (novel, known, classified, timing) if t.rows]
 
 
-def build_report(run_dirs: list[Path], out: Path) -> dict[str, Any]:
-    """Write out/report.md, out/index.html and the figures; returns the tables."""
+def build_report(run_dirs: list[Path], out: Path, command: str | None = None) -> dict[str, Any]:
+    """Write out/report.md, out/index.html and the figures; returns the tables. `command` is the
+    command line that built the report (shown at the bottom; default: this process's)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from suctionbench.evaluation.figures import headline_figure
     from suctionbench.learning.metrics import precision_recall_curve
 
     run_dirs = expand_run_dirs(run_dirs)
@@ -170,6 +176,10 @@ def build_report(run_dirs: list[Path], out: Path) -> dict[str, Any]:
             curves.setdefault(group, []).append((label, q[keep], success[keep]))
         galleries += _gallery(run_dir, [r for r in records if not r.get("success")], out, f"{label} / {summary['set']}")
     figures = []
+    headline = [{"policy": s["label"], "set": s["set"], "success": s["success_rate"], "ap": s["ap"]}
+                for s in summaries if s["policy"] not in ("analytic", "random-surface")]
+    if headline_figure(headline, out / "headline.png", POLICY_ORDER):
+        figures.append("headline.png")
     for group in sorted(curves, key=lambda g: _order(g.removesuffix("_known"), "") + (g,)):
         lines = curves[group]  # one pair of figures per set, so the lines stay readable
         fig, (ax_pr, ax_sa) = plt.subplots(1, 2, figsize=(10, 4))
@@ -191,10 +201,63 @@ def build_report(run_dirs: list[Path], out: Path) -> dict[str, Any]:
         plt.close(fig)
         figures.append(name)
     tables = _tables(summaries)
-    _write_markdown(out, tables, figures, per_object, galleries)
-    _write_html(out, tables, figures, per_object, galleries)
+    objects = _object_cards(per_object, out)
+    runs = [_run_info(run_dir, summary) for run_dir, summary in zip(run_dirs, summaries, strict=True)]
+    footer = {"runs": runs, "versions": _versions(runs),
+              "report_command": command or " ".join(["suctionbench", *map(_quote, sys.argv[1:])])}
+    _write_markdown(out, tables, figures, objects, galleries, footer)
+    _write_html(out, tables, figures, objects, galleries, footer)
     return {"out": str(out), "tables": {t.title: t.rows for t in tables},
-            "rows": tables[0].rows if tables else []}
+            "rows": tables[0].rows if tables else [], "figures": figures}
+
+
+def _quote(arg: str) -> str:
+    return shlex.quote(arg)
+
+
+def _run_info(run_dir: Path, summary: dict[str, Any]) -> dict[str, Any]:
+    """What the bottom of the report says about a run: label, set, trials, seed, camera, command."""
+    import json
+
+    run = json.loads((Path(run_dir) / "run.json").read_text())
+    return {"run": f"{summary['label']} / {summary['set']}", "trials": summary["trials"], "seed": run.get("seed"),
+            "camera": run.get("camera", "primesense"), "cup": run.get("cup"),
+            "command": run.get("command") or "-", "versions": run.get("versions") or {}}
+
+
+def _versions(runs: list[dict[str, Any]]) -> dict[str, str]:
+    """Software versions of the runs (one value per package, or the distinct values joined)."""
+    found: dict[str, list[str]] = {}
+    for run in runs:
+        for name, version in run["versions"].items():
+            if version not in found.setdefault(name, []):
+                found[name].append(version)
+    if not found:  # runs that predate recorded versions: the report's own
+        from suctionbench import __version__
+
+        found = {"suctionbench": [__version__]}
+    return {name: " / ".join(values) for name, values in found.items()}
+
+
+def _object_cards(per_object: dict[str, dict[str, list[int]]], out: Path) -> list[dict[str, Any]]:
+    """One card per object of the runs: its thumbnail (ray-cast from its mesh; None when the
+    object is no longer built) and its successes / trials in each run, objects by set then name."""
+    from suctionbench.evaluation.figures import object_thumbnail
+    from suctionbench.objects.registry import load_object
+    from suctionbench.sensing.image import save_png
+
+    keys = sorted({k for counts in per_object.values() for k in counts},
+                  key=lambda k: _order(k.split("/")[0], "")[:1] + (k,))
+    cards = []
+    for key in keys:
+        image = f"object_{key.replace('/', '_')}.png"
+        try:
+            save_png(out / image, object_thumbnail(load_object(key).mesh(), size=96))
+        except (InputError, OSError, ValueError):
+            image = None
+        cards.append({"object": key, "image": image,
+                      "counts": [(run, *counts[key]) for run, counts in per_object.items() if key in counts]})
+    return cards
 
 
 def _gallery(run_dir: Path, failed: list[dict[str, Any]], out: Path, label: str) -> list[tuple[str, str]]:
@@ -256,49 +319,81 @@ def _fmt(value: Any) -> str:
     return "-" if value is None else f"{value:.3g}" if isinstance(value, float) else str(value)
 
 
-def _write_markdown(out: Path, tables: list[Table], figures, per_object, galleries) -> None:
-    lines = ["# suctionbench report", "", "Built from the MCAP logs of the runs by `suctionbench report`. Ours: "
-             "simulation; where it disagrees with the paper's physical trials it is reported as is, never "
-             "tuned toward them.", ""]
+INTRO = ("Built from the MCAP logs of the runs by `suctionbench report`. Ours: simulation; where it disagrees "
+         f"with the physical trials of {CITATION} it is reported as is, never tuned toward them.")
+"""The report's opening paragraph."""
+
+
+def _write_markdown(out: Path, tables: list[Table], figures, objects, galleries, footer) -> None:
+    lines = ["# suctionbench report", "", INTRO, ""]
+    if figures and figures[0] == "headline.png":
+        lines += ["![Success and AP per policy and set, with the paper's physical results](headline.png)", "",
+                  "Bars: simulated success and AP (%); markers: the paper's physical success (diamond) and AP "
+                  "(circle).", ""]
     for table in tables:
         keys = list(table.rows[0])
         lines += [f"## {table.title}", "", table.note, "", "| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
         lines += ["| " + " | ".join(_fmt(row[k]) for k in keys) + " |" for row in table.rows]
         lines.append("")
-    lines += ["## Curves", ""] + [f"![{f}]({f})" for f in figures]
-    lines += ["", "## Per object (successes / trials)", ""]
-    for label, counts in per_object.items():
-        lines.append(f"**{label}**: " + ", ".join(f"{k.split('/')[-1]} {s}/{n}" for k, (s, n) in counts.items()))
-        lines.append("")
-    lines += ["## Failures (depth around the executed grasp)", ""]
+    curves = [f for f in figures if f != "headline.png"]
+    lines += ["## Curves", ""] + [f"![{f}]({f})" for f in curves]
+    lines += ["", "## Per object (successes / trials)", "", "| object | | runs |", "|---|---|---|"]
+    for card in objects:
+        image = f"![{card['object']}]({card['image']})" if card["image"] else ""
+        counts = "<br>".join(f"{run}: {s}/{n}" for run, s, n in card["counts"])
+        lines.append(f"| {card['object']} | {image} | {counts} |")
+    lines += ["", "## Failures (depth around the executed grasp)", ""]
     lines += [f"![{caption}]({name}) {caption}  " for name, caption in galleries]
+    lines += ["", "## Runs and versions", ""]
+    for run in footer["runs"]:
+        lines.append(f"- **{run['run']}**: {run['trials']} trials, seed {run['seed']}, camera {run['camera']}, "
+                     f"cup {run['cup']}; `{run['command']}`")
+    lines += ["", f"Report: `{footer['report_command']}`", "",
+              "Versions: " + ", ".join(f"{k} {v}" for k, v in footer["versions"].items())]
     with atomic_path(out / "report.md") as tmp:
         tmp.write_text("\n".join(lines) + "\n")
 
 
-def _write_html(out: Path, tables: list[Table], figures, per_object, galleries) -> None:
+def _write_html(out: Path, tables: list[Table], figures, objects, galleries, footer) -> None:
     esc = html.escape
     sections = []
+    if figures and figures[0] == "headline.png":
+        sections.append('<img class="headline" src="headline.png" alt="Success and AP per policy and set, with '
+                        'the paper\'s physical results"><p class="caption">Bars: simulated success and AP (%); '
+                        "markers: the paper's physical success (diamond) and AP (circle).</p>")
     for table in tables:
         keys = list(table.rows[0])
         head = "".join(f"<th>{esc(k)}</th>" for k in keys)
         body = "".join("<tr>" + "".join(f"<td>{esc(_fmt(row[k]))}</td>" for k in keys) + "</tr>" for row in table.rows)
         sections.append(f"<h2>{esc(table.title)}</h2><p>{esc(table.note)}</p><table><tr>{head}</tr>{body}</table>")
-    objects = "".join(
-        f"<h3>{esc(label)}</h3><p>" + ", ".join(f"{esc(k.split('/')[-1])} {s}/{n}" for k, (s, n) in t.items()) + "</p>"
-        for label, t in per_object.items()
+    curves = "".join(f'<img src="{esc(f)}" alt="{esc(f)}">' for f in figures if f != "headline.png")
+    cards = "".join(
+        '<figure class="object">'
+        + (f'<img src="{esc(c["image"])}" width="96" height="96" alt="{esc(c["object"])}">' if c["image"] else "")
+        + f"<figcaption><b>{esc(c['object'])}</b>"
+        + "".join(f"<br>{esc(run)}: {s}/{n}" for run, s, n in c["counts"]) + "</figcaption></figure>"
+        for c in objects
     )
     gallery = "".join(
         f'<figure><img src="{esc(n)}" width="192" alt="{esc(c)}"><figcaption>{esc(c)}</figcaption></figure>'
         for n, c in galleries
     )
+    runs = "".join(
+        f"<li><b>{esc(r['run'])}</b>: {r['trials']} trials, seed {esc(str(r['seed']))}, camera "
+        f"{esc(str(r['camera']))}, cup {esc(str(r['cup']))}; <code>{esc(r['command'])}</code></li>"
+        for r in footer["runs"]
+    )
+    versions = ", ".join(f"{esc(k)} {esc(v)}" for k, v in footer["versions"].items())
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>suctionbench report</title>
 <style>body{{font-family:sans-serif;margin:2em;max-width:80em}}table{{border-collapse:collapse;margin-bottom:1em}}
 td,th{{border:1px solid #999;padding:4px 8px;text-align:right}}td:first-child,th{{text-align:left}}
-figure{{display:inline-block;margin:4px;width:192px;font-size:small}}</style></head><body>
-<h1>suctionbench report</h1><p>Built from the MCAP logs of the runs. Ours: simulation; where it disagrees with the
-paper's physical trials it is reported as is, never tuned toward them.</p>
-{"".join(sections)}<h2>Curves</h2>{"".join(f'<img src="{esc(f)}" alt="{esc(f)}">' for f in figures)}
-<h2>Per object (successes / trials)</h2>{objects}<h2>Failures</h2>{gallery}</body></html>"""
+img{{max-width:100%}}figure{{display:inline-block;margin:4px;width:192px;font-size:small;vertical-align:top}}
+figure.object{{width:230px}}code{{font-size:small;overflow-wrap:anywhere}}.caption{{font-size:small}}
+footer{{margin-top:2em;border-top:1px solid #999;font-size:small}}</style></head><body>
+<h1>suctionbench report</h1><p>{esc(INTRO)}</p>
+{"".join(sections)}<h2>Curves</h2>{curves}
+<h2>Per object (successes / trials)</h2>{cards}<h2>Failures</h2>{gallery}
+<footer><h2>Runs and versions</h2><ul>{runs}</ul><p>Report: <code>{esc(footer["report_command"])}</code></p>
+<p>Versions: {versions}</p></footer></body></html>"""
     with atomic_path(out / "index.html") as tmp:
         tmp.write_text(page)

@@ -91,6 +91,7 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
 
     policy_args = dict(policy_args or {})
     label = policy_label(policy, policy_args)
+    command = command or _invocation()
     if policy in ("analytic", "random-surface"):
         if policy_args:
             raise InputError(f"--policy-arg: the known-state policy '{policy}' takes no options")
@@ -134,6 +135,16 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
         if progress:
             progress(1)
     return summarize_run(out)
+
+
+def _invocation() -> str | None:
+    """This process's command line when it is the `suctionbench` CLI (for run.json), else None."""
+    import shlex
+    import sys
+
+    if Path(sys.argv[0]).name not in ("suctionbench", "__main__.py") or len(sys.argv) < 2:
+        return None
+    return " ".join(["suctionbench", *map(shlex.quote, sys.argv[1:])])
 
 
 def _versions() -> dict[str, str]:

@@ -1,0 +1,105 @@
+"""Figures of the report: the headline figure (success and AP per policy and set beside the paper's
+physical results) and small shaded thumbnails of the objects (ray cast, no OpenGL needed)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from suctionbench.evaluation.paper import PAPER_RESULTS
+from suctionbench.io import atomic_path
+
+THUMBNAIL_VIEW = np.array([0.55, -0.75, 0.65])
+"""Direction from an object towards the thumbnail's viewer (object frame; z is up in the sets'
+object frames): from the front right, above."""
+
+THUMBNAIL_LIGHT = np.array([0.3, -0.4, 1.0])
+"""Direction towards the thumbnail's light."""
+
+
+def object_thumbnail(mesh: Any, size: int = 96) -> np.ndarray:
+    """An (size, size, 3) uint8 picture of a mesh: orthographic view along -THUMBNAIL_VIEW,
+    Lambertian shading of the first hit's face normal, white background."""
+    from suctionbench.geometry.raycast import RayCaster
+
+    view = THUMBNAIL_VIEW / np.linalg.norm(THUMBNAIL_VIEW)
+    right = np.cross([0.0, 0.0, 1.0], view)
+    right /= np.linalg.norm(right)
+    up = np.cross(view, right)
+    vertices = np.asarray(mesh.vertices, dtype=float)
+    centre = (vertices.min(axis=0) + vertices.max(axis=0)) / 2
+    extent = 1.08 * max(np.abs((vertices - centre) @ right).max(), np.abs((vertices - centre) @ up).max())
+    steps = (np.arange(size) + 0.5) / size * 2 - 1
+    grid_u, grid_v = np.meshgrid(steps * extent, -steps * extent)
+    radius = float(np.linalg.norm(vertices - centre, axis=1).max())
+    origins = centre + 2 * radius * view + grid_u[..., None] * right + grid_v[..., None] * up
+    directions = np.broadcast_to(-view, origins.shape)
+    hits = RayCaster(mesh).cast(origins.reshape(-1, 3), np.ascontiguousarray(directions.reshape(-1, 3)))
+    hit = np.isfinite(hits.distance)
+    normals = np.zeros((len(hit), 3))
+    normals[hit] = np.asarray(mesh.face_normals)[hits.face[hit]]
+    light = THUMBNAIL_LIGHT / np.linalg.norm(THUMBNAIL_LIGHT)
+    shade = 0.35 + 0.65 * np.clip(np.abs(normals @ light), 0, 1)
+    base = np.array([95.0, 140.0, 200.0])  # a muted blue
+    colour = np.where(hit[:, None], shade[:, None] * base[None, :] + (1 - shade[:, None]) * 20, 255.0)
+    return colour.reshape(size, size, 3).clip(0, 255).astype(np.uint8)
+
+
+SET_ORDER = ("basic", "typical", "adversarial")
+"""Panel order of the headline figure (other sets follow, sorted)."""
+
+
+def headline_figure(rows: list[dict[str, Any]], path: Path, policy_order: tuple[str, ...]) -> bool:
+    """Bars of simulated success and AP (%) per policy, one panel per object set, with the paper's
+    physical success (black diamond) and AP (open circle) as markers where it reports the pair.
+    `rows`: dicts with policy, set, success (fraction) and ap (fraction or None). Returns False (and
+    writes nothing) without rows."""
+    if not rows:
+        return False
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    sets = sorted({r["set"] for r in rows}, key=lambda s: (SET_ORDER.index(s) if s in SET_ORDER else 9, s))
+    fig, axes = plt.subplots(1, len(sets), figsize=(max(4.2 * len(sets), 5.5), 3.6), squeeze=False, sharey=True)
+    for ax, set_name in zip(axes[0], sets, strict=True):
+        mine = sorted((r for r in rows if r["set"] == set_name),
+                      key=lambda r: (policy_order.index(r["policy"]) if r["policy"] in policy_order else 99,
+                                     r["policy"]))
+        x = np.arange(len(mine))
+        success = [100 * r["success"] for r in mine]
+        ap = [np.nan if r["ap"] is None else 100 * r["ap"] for r in mine]
+        ax.bar(x - 0.2, success, 0.4, color="#4C78A8", label="success (sim)")
+        ax.bar(x + 0.2, ap, 0.4, color="#F58518", label="AP (sim)")
+        for i, r in enumerate(mine):
+            paper = PAPER_RESULTS.get(r["policy"], {}).get(set_name)
+            if paper:  # every marker is labelled; the figure's legend keeps one entry per label
+                ax.plot(i - 0.2, paper[0], "D", color="black", ms=6, zorder=3, label="success (paper, physical)")
+                ax.plot(i + 0.2, paper[1], "o", mfc="white", mec="black", ms=7, zorder=3, label="AP (paper, physical)")
+            ax.text(i - 0.2, success[i] + 1.5, f"{success[i]:.0f}", ha="center", fontsize=7)
+        ax.set_xticks(x, [_short(r["policy"]) for r in mine], rotation=25, ha="right", fontsize=8)
+        ax.set_title(set_name, fontsize=10)
+        ax.set_ylim(0, 105)
+        ax.grid(axis="y", alpha=0.3)
+    axes[0][0].set_ylabel("%")
+    handles: dict[str, Any] = {}
+    for ax in axes[0]:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(label, handle)
+    fig.legend(list(handles.values()), list(handles), loc="upper center", ncol=4, fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0, 0, 1, 0.9))
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=110)
+    plt.close(fig)
+    return True
+
+
+def _short(policy: str) -> str:
+    """A policy label short enough for a tick: a user spec's file name and factory."""
+    if ":" in policy and ("/" in policy or "\\" in policy):
+        head, _, tail = policy.rpartition(":")
+        return f"{Path(head).name}:{tail}"
+    return policy if len(policy) <= 28 else policy[:27] + "…"

@@ -64,7 +64,7 @@ def headline_figure(rows: list[dict[str, Any]], path: Path, policy_order: tuple[
     import matplotlib.pyplot as plt
 
     sets = sorted({r["set"] for r in rows}, key=lambda s: (SET_ORDER.index(s) if s in SET_ORDER else 9, s))
-    fig, axes = plt.subplots(1, len(sets), figsize=(max(4.2 * len(sets), 5.5), 3.6), squeeze=False, sharey=True)
+    fig, axes = plt.subplots(1, len(sets), figsize=(max(4.2 * len(sets), 7.0), 3.6), squeeze=False, sharey=True)
     for ax, set_name in zip(axes[0], sets, strict=True):
         mine = sorted((r for r in rows if r["set"] == set_name),
                       key=lambda r: (policy_order.index(r["policy"]) if r["policy"] in policy_order else 99,

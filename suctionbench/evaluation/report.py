@@ -388,7 +388,8 @@ def _write_html(out: Path, tables: list[Table], figures, objects, galleries, foo
 <style>body{{font-family:sans-serif;margin:2em;max-width:80em}}table{{border-collapse:collapse;margin-bottom:1em}}
 td,th{{border:1px solid #999;padding:4px 8px;text-align:right}}td:first-child,th{{text-align:left}}
 img{{max-width:100%}}figure{{display:inline-block;margin:4px;width:192px;font-size:small;vertical-align:top}}
-figure.object{{width:230px}}code{{font-size:small;overflow-wrap:anywhere}}.caption{{font-size:small}}
+figcaption{{overflow-wrap:anywhere}}figure.object{{display:inline-flex;gap:8px;width:330px;align-items:flex-start}}
+figure.object img{{flex:none}}code{{font-size:small;overflow-wrap:anywhere}}.caption{{font-size:small}}
 footer{{margin-top:2em;border-top:1px solid #999;font-size:small}}</style></head><body>
 <h1>suctionbench report</h1><p>{esc(INTRO)}</p>
 {"".join(sections)}<h2>Curves</h2>{curves}

@@ -100,3 +100,29 @@ def test_gym_loop_runs_as_a_script():
     lines = result.stdout.strip().splitlines()
     assert [line.split(":")[0] for line in lines[:2]] == ["episode 0", "episode 1"]
     assert lines[-1].startswith("success rate") and lines[-1].endswith("over 2 episodes")
+
+
+def test_render_depth_writes_an_image_plan_reads(tmp_path):
+    from suctionbench.planning import plan_grasp, read_depth
+
+    out = tmp_path / "scene.png"
+    result = subprocess.run([sys.executable, "examples/render_depth.py", "--object", "basic/box_tea", "--seed", "1",
+                             "--out", str(out)], cwd=ROOT, capture_output=True, text=True, timeout=300,
+                            env={**os.environ, "MUJOCO_GL": "egl"})
+    assert result.returncode == 0, result.stderr[-2000:]
+    depth = read_depth(out)
+    assert depth.shape == (480, 640) and 0.3 < float(np.median(depth[depth > 0])) < 1.0
+    grasp = plan_grasp(depth, "primesense", policy="planarity-centroid", seed=0)
+    assert grasp.observation.mask[int(grasp.action.pixel[1]), int(grasp.action.pixel[0])]
+
+
+def test_shipped_depth_example_is_the_scene_render_depth_makes():
+    from PIL import Image
+
+    from suctionbench.planning import plan_grasp, read_depth
+
+    depth = read_depth(EXAMPLES / "scene_mug.png")  # examples/render_depth.py's defaults
+    assert Image.open(EXAMPLES / "scene_mug.png").mode.startswith("I") and depth.shape == (480, 640)
+    result = plan_grasp(depth, "primesense", policy="planarity-centroid", seed=0)
+    assert 5000 < result.observation.mask.sum() < 8000  # the mug, not the bin or the robot
+    assert result.plane.inlier_fraction > 0.7 and result.action.approach_world[2] < -0.8

@@ -65,7 +65,8 @@ def load_object(key: str) -> ObjectRecord:
 
 def _user_sets() -> list[str]:
     root = user_root()
-    return sorted(d.name for d in root.iterdir() if d.is_dir()) if root.is_dir() else []
+    # hidden folders are temp or old copies of a write in progress (see build_object), never sets
+    return sorted(d.name for d in root.iterdir() if d.is_dir() and not d.name.startswith(".")) if root.is_dir() else []
 
 
 def resolve_objects(source: str) -> list[ObjectRecord]:

@@ -490,3 +490,30 @@ def draw_grasp(result: PlanResult, path: str | Path, *, cup_radius: float | None
     draw.text((6, 6), f"{result.policy}  q = {q}  ({u:.0f}, {v:.0f})  depth {action.depth:.3f} m", fill=colour)
     with atomic_path(path) as tmp:
         image.save(tmp, format="PNG")
+
+
+def plan_files(
+    depth: str | Path,
+    camera: str | Path,
+    *,
+    mask: str | Path | None = None,
+    camera_pose: str | Path | None = None,
+    policy: str = "gqcnn",
+    policy_args: dict[str, Any] | None = None,
+    model: str | Path | None = None,
+    seed: int = 0,
+    depth_scale: float | None = None,
+    table_height: float = 0.0,
+    out: str | Path | None = None,
+) -> dict[str, Any]:
+    """`suctionbench plan`: read the files, plan (`plan_grasp`), draw the grasp to `out` if given,
+    and return the JSON-ready result (`PlanResult.to_dict` plus the input and output paths)."""
+    image = read_depth(depth, depth_scale)
+    result = plan_grasp(
+        image, camera, mask=None if mask is None else read_mask(mask, image.shape),
+        camera_pose=None if camera_pose is None else read_camera_pose(camera_pose), policy=policy,
+        policy_args=policy_args, model=model, seed=seed, table_height=table_height,
+    )
+    if out is not None:
+        draw_grasp(result, out)
+    return {"depth": str(depth), **result.to_dict(), "seed": seed, "out": None if out is None else str(out)}

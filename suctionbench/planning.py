@@ -516,4 +516,4 @@ def plan_files(
     )
     if out is not None:
         draw_grasp(result, out)
-    return {"depth": str(depth), **result.to_dict(), "seed": seed, "out": None if out is None else str(out)}
+    return {"depth_file": str(depth), **result.to_dict(), "seed": seed, "out": None if out is None else str(out)}

@@ -253,7 +253,7 @@ class PerturbationConfig:
     """The paper's environment model for robust wrench resistance ("Details of Distributions").
 
     The paper writes N(0, s I) without saying whether s is a variance; every value here is a
-    standard deviation in SI units (FACTS.md section 2).
+    standard deviation in SI units.
     """
 
     num_samples: int = 50

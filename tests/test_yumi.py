@@ -20,7 +20,7 @@ from suctionbench.sim.yumi import (
     yumi_xml_path,
 )
 
-# Right arm of the OrebroUniversity/yumi URDF as tabulated in FACTS.md section 6, in chain order
+# Right arm of the BSD-licensed OrebroUniversity/yumi URDF, in chain order
 # j1 -> j2 -> j7 -> j3 -> j4 -> j5 -> j6: joint origin xyz (m) and rpy (rad) in the parent link,
 # then the fixed flange frame (0.007 m along link-7 z, rotated pi about z).
 HALF_PI = np.pi / 2
@@ -82,12 +82,12 @@ def _right_limits(model) -> tuple[np.ndarray, np.ndarray]:
 # -- forward kinematics ---------------------------------------------------------------------------
 
 def test_zero_configuration_matches_facts():
-    # FACTS section 6: "all zeros put it [the right flange] at about (0.568, 0.006, 0.415)".
+    # The URDF's chain: all zeros put the right flange at about (0.568, 0.006, 0.415).
     np.testing.assert_allclose(flange_pose(np.zeros(7))[:3, 3], [0.568, 0.006, 0.415], atol=5e-3)
 
 
 def test_home_configuration_points_down_at_facts_position():
-    # FACTS section 6: joints [1.2144, -1.0321, -1.1007, 0.2987, -1.8526, 1.2536, -2.4218] (chain
+    # The URDF's chain: joints [1.2144, -1.0321, -1.1007, 0.2987, -1.8526, 1.2536, -2.4218] (chain
     # order) "put the right flange at about (0.500, -0.200, 0.256) m pointing straight down".
     pose = flange_pose(HOME_RIGHT)
     np.testing.assert_allclose(pose[:3, 3], [0.500, -0.200, 0.256], atol=5e-3)

@@ -47,7 +47,8 @@ and 400 deg/s for j4, j5, j6 (ABB IRB 14000 data, as in the URDF velocity limits
 
 HOME_RIGHT = _read_only([1.2144, -1.0321, -1.1007, 0.2987, -1.8526, 1.2536, -2.4218])
 """Right-arm home configuration (rad, chain order): flange at about (0.500, -0.200, 0.256) m with
-its z axis straight down (FACTS section 6); the keyframe "home" of yumi.xml uses it."""
+its z axis straight down (forward kinematics of the public OrebroUniversity/yumi URDF); the keyframe
+"home" of yumi.xml uses it."""
 
 
 def yumi_xml_path() -> Path:

@@ -375,3 +375,15 @@ def test_third_party_robot_meshes_import(tmp_path):
     expected_ok = [c for c in third_party_cases() if c.error is None]
     imported = [name for name, out in outcomes.items() if out == "ok"]
     assert len(imported) == len(expected_ok) >= 20
+
+
+def test_hidden_folders_in_the_user_root_are_not_sets(corpus, tmp_path, monkeypatch):
+    from suctionbench.objects.registry import list_objects
+
+    monkeypatch.setenv("SUCTIONBENCH_HOME", str(tmp_path))
+    (tmp_path / "objects" / ".mine.k2j4x9").mkdir(parents=True)  # a write killed half-way
+    import_mesh(corpus["seams_box.obj"].path, set_name="mine", name="box")
+    user = [r.key for r in list_objects() if r.set not in ("basic", "typical", "adversarial")]
+    assert user == ["mine/box"]
+    with pytest.raises(InputError, match="unknown"):
+        list_objects(".mine.k2j4x9")

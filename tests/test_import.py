@@ -115,6 +115,10 @@ def build_corpus(directory: Path) -> list[Case]:
     text("seams_sphere.obj", _obj_text(sphere.vertices, sphere.faces), volume=sphere.volume)
     cylinder = trimesh.creation.cylinder(radius=0.025, height=0.08, sections=40)
     text("seams_cylinder.obj", _obj_text(cylinder.vertices, cylinder.faces), volume=cylinder.volume)
+    glb = sphere.copy()
+    glb.unmerge_vertices()  # glTF stores a vertex per UV: every triangle its own island
+    glb.visual = trimesh.visual.TextureVisuals(uv=np.random.default_rng(1).uniform(size=(len(glb.vertices), 2)))
+    save("seams_sphere.glb", glb, volume=sphere.volume)
     # Pieces that touch face to face (a modeller's L-bracket, a CAD table) and pieces that overlap.
     piece_a, piece_b = _box((0.06, 0.02, 0.02)), _box((0.02, 0.02, 0.04), (0.02, 0.0, 0.03))
     both = trimesh.util.concatenate([piece_a, piece_b])

@@ -1,0 +1,138 @@
+"""`suctionbench bench label|episode|agreement|generate|plan`: speed and agreement figures."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+import typer
+
+from suctionbench.cli.common import JsonOpt, SeedOpt, bench_app, print_kv, resolve_workers, run_command
+from suctionbench.errors import InputError
+
+
+@bench_app.command("label")
+def bench_label(
+    mesh: Annotated[str | None, typer.Option(help="Mesh to label (default: the shipped ~10k-face soap bar).")] = None,
+    mass: Annotated[float, typer.Option(help="Object mass in kg.")] = 0.15,
+    grasps: Annotated[int, typer.Option(help="Grasps labelled by the fast path.")] = 1000,
+    reference_grasps: Annotated[int, typer.Option(help="Of those, grasps also labelled by the reference.")] = 20,
+    samples: Annotated[int, typer.Option(help="Monte-Carlo samples J per grasp.")] = 50,
+    memory_grasps: Annotated[int, typer.Option(help="Grasps in the peak-memory run.")] = 10000,
+    cores: Annotated[int, typer.Option(help="CPU cores the process may use (0 = all).")] = 1,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Robust labels/s of the vectorised path vs the per-sample reference (one QP and one
+    ray-cast pass per sample), their agreement, and peak memory."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.bench import bench_label as run_bench
+
+        result = run_bench(
+            mesh=mesh, mass=mass, grasps=grasps, reference_grasps=reference_grasps, samples=samples,
+            memory_grasps=memory_grasps, cores=cores, seed=seed,
+        )
+        if not as_json:
+            print_kv("bench label: vectorised vs reference", result)
+        return result
+
+    run_command(as_json, body)
+
+
+@bench_app.command("episode")
+def bench_episode_cmd(
+    object_key: Annotated[str, typer.Option("--object", help="Object SET/NAME.")] = "basic/box_tea",
+    episodes: Annotated[int, typer.Option(help="Episodes to run (drop placement, analytic policy).")] = 10,
+    cores: Annotated[int, typer.Option(help="CPU cores the process may use (0 = all).")] = 1,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Pick episodes per second (rendering the observation included), sim/wall time, render time."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.bench import bench_episode
+
+        result = bench_episode(object_key=object_key, episodes=episodes, cores=cores, seed=seed)
+        if not as_json:
+            print_kv("bench episode", result)
+        return result
+
+    run_command(as_json, body)
+
+
+@bench_app.command("agreement")
+def bench_agreement_cmd(
+    sets: Annotated[str, typer.Option("--sets", help="Comma-separated object sets.")] = "basic,typical,adversarial",
+    trials: Annotated[int, typer.Option(help="Grasps in total, split over the sets (>= 1 per object).")] = 1000,
+    threshold: Annotated[float, typer.Option(help="Analytic rwr above which success is predicted.")] = 0.5,
+    workers: Annotated[int, typer.Option(help="Worker processes (0 = all cores).")] = 0,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Analytic labeller vs simulated cup on random reachable grasps: seal agreement, lift accuracy,
+    precision / recall, AP and Spearman of rwr, disagreements by cause (report, never tune)."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.evaluation.agreement import run_agreement
+
+        names = tuple(s.strip() for s in sets.split(",") if s.strip())
+        if not names:
+            raise InputError(f"--sets '{sets}': name at least one object set")
+        result = run_agreement(sets=names, trials=trials, seed=seed, threshold=threshold,
+                               workers=resolve_workers(workers))
+        if not as_json:
+            for name, figures in {"all sets": result["overall"], **result["sets"]}.items():
+                print_kv(f"analytic rwr > {threshold} vs simulated success ({name})",
+                          {k: v for k, v in figures.items() if k != "per_trial"})
+        return result
+
+    run_command(as_json, body)
+
+
+@bench_app.command("generate")
+def bench_generate_cmd(
+    objects: Annotated[str, typer.Option(help="Object set or directory.")] = "typical",
+    datapoints: Annotated[int, typer.Option(help="Datapoints per run.")] = 3000,
+    workers: Annotated[int, typer.Option(help="Workers of the parallel run (0 = all cores).")] = 0,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Dataset generation datapoints/s (all cores vs one), render ms/frame, label ms/grasp, memory."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.bench import bench_generate
+
+        result = bench_generate(objects=objects, datapoints=datapoints, workers=resolve_workers(workers),
+                                seed=seed)
+        if not as_json:
+            print_kv("bench generate", result)
+        return result
+
+    run_command(as_json, body)
+
+
+@bench_app.command("plan")
+def bench_plan_cmd(
+    policies: Annotated[str, typer.Option(help="Comma-separated image policies.")] = (
+        "random,centroid,planarity,planarity-centroid,gqcnn"
+    ),
+    model: Annotated[str | None, typer.Option(help="GQ-CNN model directory (default: the shipped one).")] = None,
+    scenes: Annotated[int, typer.Option(help="Rendered scenes (typical objects) per policy.")] = 5,
+    cores: Annotated[int, typer.Option(help="CPU cores the process may use (0 = all).")] = 0,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Seconds per planned grasp for each policy (gqcnn also against unbatched network calls)."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.bench import bench_plan
+
+        if scenes < 1:
+            raise InputError(f"--scenes {scenes}: must be at least 1")
+        result = bench_plan(policies=[p for p in policies.split(",") if p], model=model, scenes=scenes, seed=seed,
+                            cores=cores)
+        if not as_json:
+            print_kv("bench plan", result)
+        return result
+
+    run_command(as_json, body)

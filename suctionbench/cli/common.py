@@ -1,0 +1,164 @@
+"""Shared parts of the `suctionbench` command line: the app and its groups, the contract runner, progress, tables.
+
+Contract (DESIGN.md): with --json, the last stdout line is exactly one JSON object and human
+output goes to stderr; exit 0 on success, 2 on bad input (one line naming the input and the
+problem), 1 on an internal failure. Long work shows a progress bar on a terminal only.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import traceback
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Annotated, Any
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColumn, TextColumn, TimeRemainingColumn
+from rich.table import Table
+from rich.text import Text
+
+from suctionbench.errors import InputError
+
+
+class ContractGroup(typer.core.TyperGroup):
+    """Top-level command group that keeps the CLI contract for usage errors too.
+
+    Click reports a bad option before any command runs; here such errors still exit 2 and, under
+    --json, still end stdout with a JSON object.
+    """
+
+    def main(self, args: Any = None, *pargs: Any, standalone_mode: bool = True, **kwargs: Any) -> Any:
+        argv = list(sys.argv[1:] if args is None else args)
+        try:
+            rv = super().main(argv, *pargs, standalone_mode=False, **kwargs)
+        except typer.core._click.exceptions.ClickException as exc:
+            exc.show()
+            emit({"ok": False, "error": exc.format_message()}, "--json" in argv)
+            rv = exc.exit_code
+        except typer.exceptions.Abort:  # Ctrl-C, or a closed pipe under --help
+            err.print("aborted")
+            rv = 1
+        code = rv if isinstance(rv, int) else 0
+        if not standalone_mode:
+            return code
+        sys.exit(code)
+
+
+app = typer.Typer(
+    cls=ContractGroup,
+    add_completion=False,
+    no_args_is_help=True,
+    help="Robust suction grasp labels, datasets, GQ-CNN policies and a MuJoCo benchmark.",
+)
+bench_app = typer.Typer(no_args_is_help=True, help="Speed figures, each timed against its reference in one run.")
+app.add_typer(bench_app, name="bench")
+objects_app = typer.Typer(no_args_is_help=True, help="Object sets: list, show, build, import, generate the corpus.")
+app.add_typer(objects_app, name="objects")
+dataset_app = typer.Typer(no_args_is_help=True, help="Inspect generated datasets.")
+app.add_typer(dataset_app, name="dataset")
+model_app = typer.Typer(no_args_is_help=True, help="Inspect trained GQ-CNN models.")
+app.add_typer(model_app, name="model")
+
+err = Console(stderr=True, soft_wrap=True)  # soft wrap: one error, one line
+
+JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object on the last stdout line.")]
+SeedOpt = Annotated[int, typer.Option("--seed", help="Seed of every random draw.")]
+
+def emit(result: dict[str, Any], as_json: bool) -> None:
+    if as_json:
+        print(json.dumps(result, sort_keys=False))
+
+
+def run_command(as_json: bool, body: Callable[[], dict[str, Any]]) -> None:
+    """Run a command body under the CLI contract (exit codes, JSON on the last line)."""
+    try:
+        result = body()
+    except InputError as exc:
+        err.print(f"[bold red]error:[/] {exc}", highlight=False)
+        emit({"ok": False, "error": str(exc)}, as_json)
+        raise typer.Exit(2) from None
+    except typer.Exit:
+        raise
+    except Exception as exc:  # an internal failure: say so, with the traceback on stderr
+        err.print(f"[bold red]internal error:[/] {type(exc).__name__}: {exc}", highlight=False)
+        traceback.print_exc(file=sys.stderr)
+        emit({"ok": False, "error": f"internal: {type(exc).__name__}: {exc}"}, as_json)
+        raise typer.Exit(1) from None
+    emit({"ok": True, **result}, as_json)
+
+
+class RateColumn(ProgressColumn):
+    """Items per second of a progress task."""
+
+    def render(self, task: Any) -> Text:
+        return Text(f"{task.speed:,.0f}/s" if task.speed else "-/s")
+
+
+@contextmanager
+def progress_bar(total: int, label: str, enabled: bool) -> Iterator[Callable[[int], None]]:
+    """A rich progress bar on an interactive stderr; a no-op callback otherwise."""
+    if not enabled or not err.is_terminal:
+        yield lambda _n: None
+        return
+    columns = (TextColumn(label), BarColumn(), MofNCompleteColumn(), RateColumn(), TimeRemainingColumn())
+    with Progress(*columns, console=err, transient=True) as bar:
+        task = bar.add_task(label, total=total)
+        yield lambda n: bar.advance(task, n)
+
+
+def parse_vector(text: str, size: int, what: str) -> np.ndarray:
+    """Parse 'a,b,c' into a finite float vector of `size`, or raise InputError naming `what`."""
+    try:
+        values = np.array([float(x) for x in text.split(",")], dtype=float)
+    except ValueError:
+        raise InputError(f"{what} '{text}': expected {size} comma-separated numbers") from None
+    if values.shape != (size,):
+        raise InputError(f"{what} '{text}': expected {size} comma-separated numbers, got {len(values)}")
+    if not np.all(np.isfinite(values)):
+        raise InputError(f"{what} '{text}': values must be finite")
+    return values
+
+
+def resolve_workers(requested: int) -> int:
+    """--workers: 0 means every core."""
+    return requested or os.cpu_count() or 1
+
+
+def print_kv(title: str, result: dict[str, Any]) -> None:
+    """A two-column table of a command's result (human output)."""
+    table = Table(title=title, show_header=False)
+    for key, value in result.items():
+        table.add_row(key, f"{value:.4g}" if isinstance(value, float) else str(value))
+    Console().print(table)
+
+
+def record_row(record: Any) -> dict[str, Any]:
+    return {
+        "key": record.key,
+        "generator": record.generator,
+        "faces": record.faces,
+        "parts": len(record.parts),
+        "mass": record.mass,
+        "extents": record.extents,
+        "stable_poses": len(record.stable_poses),
+    }
+
+
+def print_rows(title: str, rows: list[dict[str, Any]]) -> None:
+    if not rows:
+        err.print(f"{title}: none")
+        return
+    table = Table(title=title)
+    for col in rows[0]:
+        table.add_column(col)
+    for row in rows:
+        table.add_row(*[
+            f"{v:.4g}" if isinstance(v, float) else ",".join(f"{x:.3g}" for x in v) if isinstance(v, list) else str(v)
+            for v in row.values()
+        ])
+    Console().print(table)

@@ -1,0 +1,108 @@
+"""`suctionbench generate` (datasets) and `suctionbench dataset show`."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Annotated, Any
+
+import numpy as np
+import typer
+
+from suctionbench.cli.common import (
+    JsonOpt,
+    SeedOpt,
+    app,
+    dataset_app,
+    print_rows,
+    progress_bar,
+    resolve_workers,
+    run_command,
+)
+from suctionbench.errors import InputError
+
+
+@app.command()
+def generate(
+    objects: Annotated[str, typer.Option(help="Object set (basic, typical, adversarial) or a directory (corpus).")],
+    datapoints: Annotated[int, typer.Option(help="Number of datapoints.")],
+    out: Annotated[Path, typer.Option(help="Dataset directory.")],
+    camera: Annotated[str, typer.Option(help="Camera preset or intrinsics TOML.")] = "primesense",
+    engine: Annotated[str, typer.Option(help="local (process pool) or ray.")] = "local",
+    workers: Annotated[int, typer.Option(help="Worker processes (0 = all cores).")] = 0,
+    address: Annotated[str | None, typer.Option(help="Ray cluster address (engine ray).")] = None,
+    grasps_per_object: Annotated[int, typer.Option(help="Grasp candidates per object.")] = 200,
+    cup: Annotated[str, typer.Option(help="Cup preset: default or paper.")] = "default",
+    resume: Annotated[bool, typer.Option(help="Continue an interrupted run with the same configuration.")] = False,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing dataset.")] = False,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Generate a Dex-Net-style dataset: rendered noisy depth thumbnails with robust labels."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.config import LabelConfig, cup_preset
+        from suctionbench.dataset.generate import GenerationConfig, generate_dataset
+        from suctionbench.objects.registry import resolve_objects
+
+        if grasps_per_object < 1:
+            raise InputError(f"--grasps-per-object {grasps_per_object}: must be at least 1")
+        records = resolve_objects(objects)
+        config = GenerationConfig(
+            datapoints=datapoints, seed=seed, grasps_per_object=grasps_per_object,
+            label=LabelConfig(cup=cup_preset(cup)),
+        )
+        start = time.perf_counter()
+        with progress_bar(datapoints, "generating", not as_json) as advance:
+            card = generate_dataset(
+                out, [str(r.directory) for r in records], [r.key for r in records], camera, config,
+                engine=engine, workers=resolve_workers(workers), address=address, resume=resume,
+                overwrite=overwrite, progress=advance,
+            )
+        elapsed = time.perf_counter() - start
+        summary = {k: card[k] for k in ("datapoints", "shards", "positive_rate", "fingerprint")}
+        summary.update(out=str(out), seconds=round(elapsed, 2), datapoints_per_s=round(card["datapoints"] / elapsed, 1),
+                       regenerated_corrupt_units=len(card.get("regenerated_corrupt_units", [])))
+        if not as_json:
+            print_rows("dataset", [summary])
+        return summary
+
+    run_command(as_json, body)
+
+
+@dataset_app.command("show")
+def dataset_show(
+    directory: Annotated[Path, typer.Argument(help="Dataset directory.")],
+    thumbnails: Annotated[Path | None, typer.Option(help="Save 16 thumbnails with labels to this PNG.")] = None,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Counts, positive rate, camera and objects of a dataset; optionally a thumbnail sheet."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.dataset.storage import DatasetReader, read_card
+        from suctionbench.learning.data import label_threshold
+
+        card = read_card(directory)
+        reader = DatasetReader(directory)
+        summary = {
+            "datapoints": reader.num_datapoints, "shards": reader.num_shards,
+            "positive_rate": card.get("positive_rate"), "camera": card.get("camera", {}).get("name"),
+            "objects": len(card.get("objects", [])), "status": card.get("status"),
+            "threshold": label_threshold(card),
+        }
+        if thumbnails is not None:
+            from suctionbench.sensing.image import save_png
+            from suctionbench.sensing.thumbnails import to_uint8_grid
+
+            shard = reader.shard(0)
+            rng = np.random.default_rng(seed)
+            pick = rng.choice(len(shard["robust_suction_wrench_resistance"]), size=16, replace=False)
+            labels = shard["robust_suction_wrench_resistance"][pick] > summary["threshold"]
+            save_png(thumbnails, to_uint8_grid(shard["depth_ims_tf_table"][pick, ..., 0], labels))
+            summary["thumbnails"] = str(thumbnails)
+        if not as_json:
+            print_rows(str(directory), [summary])
+        return summary
+
+    run_command(as_json, body)

@@ -1,0 +1,94 @@
+"""`suctionbench eval` (the benchmark) and `suctionbench report`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+
+from suctionbench.cli.common import JsonOpt, app, print_rows, progress_bar, resolve_workers, run_command
+from suctionbench.errors import InputError
+
+
+@app.command("eval")
+def eval_cmd(
+    policy: Annotated[
+        str, typer.Option(help="Policy: gqcnn, planarity-centroid, centroid, planarity, random, analytic.")
+    ],
+    out: Annotated[Path, typer.Option(help="Run directory (trials/*.mcap, run.json).")],
+    set_name: Annotated[str | None, typer.Option("--set", help="Object set (instead of --task).")] = None,
+    task: Annotated[str | None, typer.Option(help="Task name (tasks/*.toml) or TOML path.")] = None,
+    model: Annotated[str | None, typer.Option(help="GQ-CNN model directory (default: the shipped one).")] = None,
+    trials: Annotated[int | None, typer.Option(help="Number of trials (default: the task's).")] = None,
+    workers: Annotated[int, typer.Option(help="Parallel workers (0 = all cores).")] = 0,
+    engine: Annotated[str, typer.Option(help="local or ray.")] = "local",
+    address: Annotated[str | None, typer.Option(help="Ray cluster address.")] = None,
+    metric: Annotated[
+        str | None, typer.Option(help="3D metric of the analytic policy (default: each of the task's, else rwr).")
+    ] = None,
+    cup: Annotated[str, typer.Option(help="Cup preset: default or paper.")] = "default",
+    seed: Annotated[int | None, typer.Option(help="Base seed of the trials (default: the task's).")] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Run the benchmark: seeded trials in simulation, one MCAP log each, and the paper-style table."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.evaluation.runner import run_eval
+        from suctionbench.evaluation.tasks import Task, load_task
+
+        if (set_name is None) == (task is None):
+            raise InputError("give exactly one of --set S or --task T")
+        the_task = load_task(task) if task else Task(name=set_name, set=set_name, trials=trials or 25)
+        runs = {}
+        if metric is not None:
+            metrics = (metric,)
+        elif the_task.metrics and policy == "analytic":
+            metrics = the_task.metrics  # one run per metric, in out/METRIC
+        else:
+            metrics = ("rwr",)
+        for m in metrics:
+            run_dir = out / m if len(metrics) > 1 else out
+            count = trials or the_task.trials
+            with progress_bar(count, f"{policy} {m if len(metrics) > 1 else ''}".strip(), not as_json) as advance:
+                runs[m] = run_eval(the_task, policy, run_dir, model=model, trials=trials, seed=seed,
+                                   workers=resolve_workers(workers), engine=engine, address=address,
+                                   metric=m, cup=cup, progress=advance)
+        if not as_json:
+            known = bool(the_task.metrics)  # the paper's known-objects table: accuracy and Spearman too
+            rows = [{"policy": r["label"], "set": r["set"],
+                     "trials": r["trials"], "AP": r["ap"], "success": r["success_rate"],
+                     **({"accuracy": r["accuracy_q"], "spearman": r["spearman_q"]} if known else {}),
+                     "label_precision": r["label_precision"], "picks_per_hour": r["picks_per_hour"],
+                     "invalid": r["invalid"]} for m, r in runs.items()]
+            print_rows(f"eval {the_task.name}", rows)
+            if known and policy != "analytic":  # executed grasps scored by each 3D metric
+                print_rows("3D metrics against simulated success",
+                            [{"metric": m, **stats} for r in runs.values() for m, stats in r["by_metric"].items()])
+        return {"out": str(out), "runs": runs} if len(runs) > 1 else {"out": str(out), **next(iter(runs.values()))}
+
+    run_command(as_json, body)
+
+
+@app.command()
+def report(
+    run_dirs: Annotated[
+        list[Path], typer.Argument(help="Run directories from `suctionbench eval`, or directories holding runs.")
+    ],
+    out: Annotated[Path, typer.Option(help="Report directory (index.html, report.md, figures).")],
+    as_json: JsonOpt = False,
+) -> None:
+    """HTML + Markdown report of eval runs: tables, PR and success-attempt curves, failures."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.evaluation.report import build_report
+
+        result = build_report(run_dirs, out)
+        if not as_json:
+            for title, rows in result["tables"].items():
+                print_rows(title, rows)
+            Console().print(f"report -> {out / 'index.html'}")
+        return result
+
+    run_command(as_json, body)

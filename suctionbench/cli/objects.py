@@ -1,0 +1,176 @@
+"""`suctionbench objects list|show|build|stats|import|generate`."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from suctionbench.cli.common import (
+    JsonOpt,
+    SeedOpt,
+    objects_app,
+    print_rows,
+    progress_bar,
+    record_row,
+    resolve_workers,
+    run_command,
+)
+from suctionbench.errors import InputError
+
+
+@objects_app.command("list")
+def objects_list(
+    set_name: Annotated[str | None, typer.Option("--set", help="Only this set.")] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """List built objects (evaluation sets and user sets)."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.objects.registry import list_objects
+
+        rows = [record_row(r) for r in list_objects(set_name)]
+        if not as_json:
+            print_rows(f"objects{' in ' + set_name if set_name else ''}", rows)
+        return {"count": len(rows), "objects": rows}
+
+    run_command(as_json, body)
+
+
+@objects_app.command("show")
+def objects_show(
+    key: Annotated[str, typer.Argument(help="SET/NAME, e.g. basic/box_cereal.")],
+    as_json: JsonOpt = False,
+) -> None:
+    """Show one object's record (object.toml)."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.objects.registry import load_object
+
+        record = load_object(key)
+        data = record.to_toml()
+        if not as_json:
+            table = Table(title=key, show_header=False)
+            for k, v in data.items():
+                if k == "stable_poses":
+                    v = ", ".join(f"{p['probability']:.3f}" for p in v)
+                table.add_row(k, str(v))
+            Console().print(table)
+        return {"key": key, "directory": str(record.directory), **data}
+
+    run_command(as_json, body)
+
+
+@objects_app.command("build")
+def objects_build(
+    set_name: Annotated[str | None, typer.Option("--set", help="Only this evaluation set.")] = None,
+    out: Annotated[Path | None, typer.Option(help="Root to build into (default: the shipped assets).")] = None,
+    workers: Annotated[int, typer.Option(help="Parallel processes.")] = 2,
+    as_json: JsonOpt = False,
+) -> None:
+    """Regenerate evaluation-set objects (meshes, stable poses, convex parts) deterministically."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.objects.batch import build_specs
+        from suctionbench.objects.registry import assets_root, eval_specs
+
+        sets = eval_specs()
+        if set_name is not None and set_name not in sets:
+            raise InputError(f"object set '{set_name}' is unknown (known: {', '.join(sets)})")
+        specs = [s for name, group in sets.items() if set_name in (None, name) for s in group]
+        start = time.perf_counter()
+        with progress_bar(len(specs), "building", not as_json) as advance:
+            records = build_specs(specs, out or assets_root(), workers=workers, progress=advance)
+        rows = [record_row(r) for r in records]
+        if not as_json:
+            print_rows("built", rows)
+        return {"built": len(records), "seconds": round(time.perf_counter() - start, 1), "objects": rows}
+
+    run_command(as_json, body)
+
+
+@objects_app.command("stats")
+def objects_stats(
+    set_name: Annotated[str | None, typer.Option("--set", help="Only this set.")] = None,
+    grasps: Annotated[int, typer.Option(help="Surface grasps per object.")] = 300,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Per-set difficulty: share of surface grasps that seal and that are robust (rwr > 0.2)."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.objects.registry import list_objects
+        from suctionbench.objects.spec import SETS
+        from suctionbench.objects.stats import set_stats
+
+        if grasps < 1:
+            raise InputError(f"--grasps {grasps}: must be at least 1")
+        sets = [set_name] if set_name else list(SETS)
+        result = {}
+        for name in sets:
+            records = list_objects(name)
+            with progress_bar(len(records), name, not as_json) as advance:
+                result[name] = set_stats(records, grasps, seed, progress=advance)
+        if not as_json:
+            print_rows("object sets", [{"set": k, **{c: v for c, v in r.items() if c != "per_object"}}
+                                        for k, r in result.items()])
+        return {"grasps_per_object": grasps, "seed": seed, "sets": result}
+
+    run_command(as_json, body)
+
+
+@objects_app.command("import")
+def objects_import(
+    path: Annotated[str, typer.Argument(help="Mesh file: OBJ, STL, PLY, OFF, GLB.")],
+    set_name: Annotated[str, typer.Option("--set", help="User set to add it to.")] = "custom",
+    name: Annotated[str, typer.Option(help="Object name (lower case, digits, _ and -).")] = "",
+    units: Annotated[str, typer.Option(help="Units of the file: m, cm or mm.")] = "m",
+    mass: Annotated[float | None, typer.Option(help="Mass in kg (default: from density, capped).")] = None,
+    repair: Annotated[bool, typer.Option(help="Try to close small holes.")] = True,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing object of that name.")] = False,
+    root: Annotated[Path | None, typer.Option(help="Object root (default: $SUCTIONBENCH_HOME/objects).")] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Import your own mesh: validate, repair small holes, decompose, compute stable poses."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.objects.importer import import_mesh
+
+        record = import_mesh(
+            path, set_name=set_name, name=name or Path(path).stem.lower(), units=units, mass=mass,
+            try_repair=repair, overwrite=overwrite, root=root,
+        )
+        row = record_row(record)
+        if not as_json:
+            print_rows("imported", [row])
+        return {**row, "directory": str(record.directory)}
+
+    run_command(as_json, body)
+
+
+@objects_app.command("generate")
+def objects_generate(
+    count: Annotated[int, typer.Option(help="Number of training objects.")] = 1500,
+    out: Annotated[Path, typer.Option(help="Corpus directory (objects are cached there).")] = Path("corpus"),
+    workers: Annotated[int, typer.Option(help="Parallel processes (0 = all cores).")] = 0,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Generate (or complete) the training corpus; evaluation objects never appear in it."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.objects.corpus_build import generate_corpus
+
+        if count < 1:
+            raise InputError(f"--count {count}: must be at least 1")
+        with progress_bar(count, "generating", not as_json) as advance:
+            summary = generate_corpus(count, seed, out, workers=resolve_workers(workers), progress=advance)
+        if not as_json:
+            print_rows("corpus", [{k: v for k, v in summary.items() if not isinstance(v, dict)}])
+        return summary
+
+    run_command(as_json, body)

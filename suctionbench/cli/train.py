@@ -1,0 +1,115 @@
+"""`suctionbench train` and `suctionbench model show`."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+from suctionbench.cli.common import (
+    JsonOpt,
+    RateColumn,
+    SeedOpt,
+    app,
+    err,
+    model_app,
+    print_kv,
+    print_rows,
+    run_command,
+)
+
+
+@contextmanager
+def _train_progress(enabled: bool) -> Iterator[Callable[[Any], None]]:
+    """A rich progress bar over training images with the epoch, loss and accuracy; a no-op off a terminal."""
+    if not enabled or not err.is_terminal:
+        yield lambda _update: None
+        return
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), RateColumn(),
+               TimeRemainingColumn())
+    with Progress(*columns, console=err, transient=True) as bar:
+        task = bar.add_task("training", total=None)
+
+        def update(u: Any) -> None:
+            bar.update(task, total=u.images_total, completed=u.images_done,
+                       description=f"epoch {u.epoch}/{u.epochs} loss {u.loss:.4f} acc {u.accuracy:.3f}")
+
+        yield update
+
+
+@app.command("train")
+def train_cmd(
+    dataset: Annotated[Path, typer.Option(help="Dataset directory (from `suctionbench generate`).")],
+    out: Annotated[Path, typer.Option(help="Output directory: model.safetensors, model.json, checkpoints.")],
+    arch: Annotated[str, typer.Option(help="Network: dn3 (Dex-Net 3.0 GQ-CNN) or compact (CPU friendly).")] = "dn3",
+    epochs: Annotated[int, typer.Option(help="Training epochs (gqcnn: 25).")] = 25,
+    device: Annotated[str, typer.Option(help="cpu, or cuda (bfloat16 mixed precision).")] = "cpu",
+    split: Annotated[str, typer.Option(help="Split: image_wise or object_wise.")] = "image_wise",
+    batch_size: Annotated[int, typer.Option(help="Training batch size (gqcnn: 64).")] = 64,
+    max_datapoints: Annotated[int | None, typer.Option(help="Train on a random subset of this many.")] = None,
+    augment: Annotated[bool, typer.Option(help="Noise and symmetrisation augmentation (gqcnn's).")] = True,
+    overwrite: Annotated[bool, typer.Option(help="Discard a run already in --out instead of resuming it.")] = False,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Train a GQ-CNN on a dataset; resumes a run of the same configuration found in --out."""
+
+    def body() -> dict[str, Any]:
+        import shlex
+
+        from suctionbench.learning.data import AUGMENT_GQCNN, AUGMENT_OFF
+        from suctionbench.learning.train import TrainConfig, train
+
+        config = TrainConfig(arch=arch, epochs=epochs, device=device, split=split, batch_size=batch_size,
+                             max_train_datapoints=max_datapoints, augment=AUGMENT_GQCNN if augment else AUGMENT_OFF,
+                             seed=seed)
+        # Every option spelled out, defaults included: the card's command reproduces the run even if defaults change.
+        command = shlex.join([
+            "suctionbench", "train", "--dataset", str(dataset), "--out", str(out), "--arch", arch, "--epochs",
+            str(epochs), "--device", device, "--split", split, "--batch-size", str(batch_size),
+            *(["--max-datapoints", str(max_datapoints)] if max_datapoints else []),
+            "--augment" if augment else "--no-augment", "--seed", str(seed),
+        ])
+        with _train_progress(not as_json) as update:
+            metrics = train(dataset, out, config, progress=update, command=command, overwrite=overwrite)
+        if not as_json:
+            keys = ("arch", "epochs", "train_accuracy", "val_accuracy", "val_ap", "train_images_per_s", "out")
+            print_rows("trained", [{k: metrics[k] for k in keys}])
+        return metrics
+
+    run_command(as_json, body)
+
+
+
+@model_app.command("show")
+def model_show(
+    directory: Annotated[Path, typer.Argument(help="Model directory (model.json + model.safetensors).")],
+    as_json: JsonOpt = False,
+) -> None:
+    """Architecture, size, metrics, dataset, camera and cup of a trained model (weights are verified)."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.learning.checkpoint import load_model
+
+        card = load_model(directory).card
+        metrics, training, data = card.get("metrics", {}), card.get("training", {}), card.get("dataset", {})
+        summary = {
+            "arch": card["arch"], "parameters": card.get("parameters"), "macs_per_grasp": card.get("macs_per_grasp"),
+            "status": training.get("status"), "epochs": training.get("epochs_completed"),
+            "train_accuracy": metrics.get("train_accuracy"), "val_accuracy": metrics.get("val_accuracy"),
+            "val_ap": metrics.get("val_ap"), "label_threshold": card.get("label", {}).get("threshold"),
+            "dataset": data.get("path"), "split": data.get("split"), "num_train": data.get("num_train"),
+            "num_val": data.get("num_val"), "camera": (data.get("camera") or {}).get("name"),
+            "cup": (data.get("cup") or {}).get("name"), "train_seconds": training.get("train_seconds"),
+            "train_images_per_s": training.get("train_images_per_s"), "device": training.get("device"),
+            "command": card.get("command"), "versions": card.get("versions"),
+        }
+        if not as_json:
+            print_kv(str(directory), summary)
+        return summary
+
+    run_command(as_json, body)

@@ -391,3 +391,43 @@ def test_hidden_folders_in_the_user_root_are_not_sets(corpus, tmp_path, monkeypa
     assert user == ["mine/box"]
     with pytest.raises(InputError, match="unknown"):
         list_objects(".mine.k2j4x9")
+
+
+def test_cli_import_takes_units_and_scale_and_reports_repairs(corpus, tmp_path):
+    from typer.testing import CliRunner
+
+    from suctionbench.cli import app
+
+    runner = CliRunner()
+    root = ["--root", str(tmp_path / "objs"), "--json"]
+    scaled = runner.invoke(
+        app,
+        [
+            "objects",
+            "import",
+            str(corpus["part_in.stl"].path),
+            "--units",
+            "in",
+            "--scale",
+            "0.5",
+            "--name",
+            "half",
+            *root,
+        ],
+    )
+    assert scaled.exit_code == 0, scaled.output
+    line = json.loads(scaled.stdout.strip().splitlines()[-1])
+    assert line["ok"] and line["scale"] == pytest.approx(0.0127) and line["repairs"] == []
+    table = runner.invoke(app, ["objects", "import", str(corpus["touching_table.stl"].path), "--name", "table", *root])
+    assert json.loads(table.stdout.strip().splitlines()[-1])["repairs"] == [
+        "5 pieces that touch face to face united into one body"
+    ]
+    for args, message in (
+        (["--scale", "0"], "scale 0.0: must be a positive, finite factor"),
+        (["--units", "ft"], "units 'ft' is unknown"),
+    ):
+        bad = runner.invoke(app, ["objects", "import", str(corpus["part_in.stl"].path), "--name", "bad", *args, *root])
+        assert bad.exit_code == 2 and message in json.loads(bad.stdout.strip().splitlines()[-1])["error"]
+    garbage = runner.invoke(app, ["objects", "import", str(corpus["garbage.obj"].path), *root])
+    error = json.loads(garbage.stdout.strip().splitlines()[-1])["error"]
+    assert garbage.exit_code == 2 and "not a readable mesh (format obj" in error and "charset" not in error

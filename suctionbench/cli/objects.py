@@ -125,29 +125,36 @@ def objects_stats(
 
 @objects_app.command("import")
 def objects_import(
-    path: Annotated[str, typer.Argument(help="Mesh file: OBJ, STL, PLY, OFF, GLB.")],
+    path: Annotated[str, typer.Argument(help="Mesh file: OBJ, STL, PLY, OFF, GLB, GLTF.")],
     set_name: Annotated[str, typer.Option("--set", help="User set to add it to.")] = "custom",
     name: Annotated[str, typer.Option(help="Object name (lower case, digits, _ and -).")] = "",
-    units: Annotated[str, typer.Option(help="Units of the file: m, cm or mm.")] = "m",
+    units: Annotated[str, typer.Option(help="Units of the file: m, cm, mm or in.")] = "m",
+    scale: Annotated[float, typer.Option(help="Extra scale factor on top of --units (e.g. a URDF mesh scale).")] = 1.0,
     mass: Annotated[float | None, typer.Option(help="Mass in kg (default: from density, capped).")] = None,
-    repair: Annotated[bool, typer.Option(help="Try to close small holes.")] = True,
+    repair: Annotated[
+        bool, typer.Option(help="Repair duplicated faces, touching or overlapping pieces, small holes, stray sheets.")
+    ] = True,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing object of that name.")] = False,
     root: Annotated[Path | None, typer.Option(help="Object root (default: $SUCTIONBENCH_HOME/objects).")] = None,
     as_json: JsonOpt = False,
 ) -> None:
-    """Import your own mesh: validate, repair small holes, decompose, compute stable poses."""
+    """Import your own mesh: read, scale, make one closed solid (seams merged, pieces united, small
+    holes closed; each defect it cannot repair named), decompose, compute stable poses."""
 
     def body() -> dict[str, Any]:
         from suctionbench.objects.importer import import_mesh
 
         record = import_mesh(
-            path, set_name=set_name, name=name or Path(path).stem.lower(), units=units, mass=mass,
+            path, set_name=set_name, name=name or Path(path).stem.lower(), units=units, scale=scale, mass=mass,
             try_repair=repair, overwrite=overwrite, root=root,
         )
         row = record_row(record)
+        repairs = record.params.get("repairs", [])
         if not as_json:
             print_rows("imported", [row])
-        return {**row, "directory": str(record.directory)}
+            for note in repairs:
+                Console(stderr=True).print(f"repaired: {note}", highlight=False)
+        return {**row, "directory": str(record.directory), "scale": record.scale, "repairs": repairs}
 
     run_command(as_json, body)
 

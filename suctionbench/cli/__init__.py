@@ -11,7 +11,7 @@ from importlib import import_module
 
 from suctionbench.cli.common import app
 
-COMMAND_MODULES = ("about", "label", "pick", "data", "evaluate", "bench", "objects", "train")
+COMMAND_MODULES = ("about", "label", "pick", "data", "evaluate", "plan", "bench", "objects", "train")
 """Command modules, imported (so registered) in this order: the order of `suctionbench --help`."""
 
 for _name in COMMAND_MODULES:

@@ -9,13 +9,16 @@ import typer
 from rich.console import Console
 
 from suctionbench.cli.common import JsonOpt, app, print_rows, progress_bar, resolve_workers, run_command
+from suctionbench.cli.plan import PolicyArgOpt
 from suctionbench.errors import InputError
 
 
 @app.command("eval")
 def eval_cmd(
     policy: Annotated[
-        str, typer.Option(help="Policy: gqcnn, planarity-centroid, centroid, planarity, random, analytic.")
+        str, typer.Option(help="Policy: gqcnn, planarity-centroid, centroid, planarity, random, analytic, "
+                               "random-surface, an installed plug-in's name, PATH.py:FACTORY or "
+                               "package.module:FACTORY.")
     ],
     out: Annotated[Path, typer.Option(help="Run directory (trials/*.mcap, run.json).")],
     set_name: Annotated[str | None, typer.Option("--set", help="Object set (instead of --task).")] = None,
@@ -29,6 +32,10 @@ def eval_cmd(
         str | None, typer.Option(help="3D metric of the analytic policy (default: each of the task's, else rwr).")
     ] = None,
     cup: Annotated[str, typer.Option(help="Cup preset: default or paper.")] = "default",
+    camera: Annotated[
+        str, typer.Option(help="Camera preset (suctionbench cameras) or intrinsics TOML.")
+    ] = "primesense",
+    policy_arg: PolicyArgOpt = None,
     seed: Annotated[int | None, typer.Option(help="Base seed of the trials (default: the task's).")] = None,
     as_json: JsonOpt = False,
 ) -> None:
@@ -37,10 +44,12 @@ def eval_cmd(
     def body() -> dict[str, Any]:
         from suctionbench.evaluation.runner import run_eval
         from suctionbench.evaluation.tasks import Task, load_task
+        from suctionbench.policies.plugins import parse_policy_args
 
         if (set_name is None) == (task is None):
             raise InputError("give exactly one of --set S or --task T")
         the_task = load_task(task) if task else Task(name=set_name, set=set_name, trials=trials or 25)
+        options = parse_policy_args(policy_arg or [])
         runs = {}
         if metric is not None:
             metrics = (metric,)
@@ -54,13 +63,13 @@ def eval_cmd(
             with progress_bar(count, f"{policy} {m if len(metrics) > 1 else ''}".strip(), not as_json) as advance:
                 runs[m] = run_eval(the_task, policy, run_dir, model=model, trials=trials, seed=seed,
                                    workers=resolve_workers(workers), engine=engine, address=address,
-                                   metric=m, cup=cup, progress=advance)
+                                   metric=m, cup=cup, camera=camera, policy_args=options, progress=advance)
         if not as_json:
             known = bool(the_task.metrics)  # the paper's known-objects table: accuracy and Spearman too
-            rows = [{"policy": r["label"], "set": r["set"],
+            rows = [{"policy": r["label"], "set": r["set"],  # short headers: 80 columns hold the table
                      "trials": r["trials"], "AP": r["ap"], "success": r["success_rate"],
-                     **({"accuracy": r["accuracy_q"], "spearman": r["spearman_q"]} if known else {}),
-                     "label_precision": r["label_precision"], "picks_per_hour": r["picks_per_hour"],
+                     **({"acc.": r["accuracy_q"], "rho": r["spearman_q"]} if known else {}),
+                     "label prec.": r["label_precision"], "picks/h": r["picks_per_hour"],
                      "invalid": r["invalid"]} for m, r in runs.items()]
             print_rows(f"eval {the_task.name}", rows)
             if known and policy != "analytic":  # executed grasps scored by each 3D metric

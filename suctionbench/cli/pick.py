@@ -10,6 +10,7 @@ import numpy as np
 import typer
 
 from suctionbench.cli.common import JsonOpt, SeedOpt, app, parse_vector, print_kv, run_command
+from suctionbench.cli.plan import PolicyArgOpt
 from suctionbench.errors import InputError
 
 
@@ -21,8 +22,10 @@ def pick(
     ] = None,
     policy: Annotated[
         str, typer.Option(help="Policy when no --grasp: analytic, random-surface (known state) or an image policy "
-                               "(random, centroid, planarity, planarity-centroid, gqcnn).")
+                               "(random, centroid, planarity, planarity-centroid, gqcnn, an installed plug-in's "
+                               "name, PATH.py:FACTORY or package.module:FACTORY).")
     ] = "analytic",
+    policy_arg: PolicyArgOpt = None,
     model: Annotated[str | None, typer.Option(help="GQ-CNN model directory (gqcnn policy).")] = None,
     metric: Annotated[str, typer.Option(help="3D metric of the analytic policy: rwr, wr, ss, pc3d.")] = "rwr",
     placement: Annotated[str, typer.Option(help="drop (random orientation) or stable (most probable pose).")] = "drop",
@@ -37,6 +40,7 @@ def pick(
 
     def body() -> dict[str, Any]:
         from suctionbench.config import cup_preset
+        from suctionbench.policies.plugins import parse_policy_args
         from suctionbench.sim.pick import PickRequest, PickRunner
 
         values = None
@@ -46,7 +50,7 @@ def pick(
                 raise InputError(f"--grasp approach {values[3:].tolist()}: must be a unit vector")
         request = PickRequest(
             object_key, seed=seed, grasp=values, policy=policy, placement=placement, cup=cup_preset(cup),
-            camera=camera, model=model, metric=metric,
+            camera=camera, model=model, metric=metric, policy_args=parse_policy_args(policy_arg or []),
         )
         if log is not None and log.suffix != ".mcap":
             raise InputError(f"--log '{log}': expected a .mcap file name")

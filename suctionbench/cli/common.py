@@ -13,34 +13,82 @@ import sys
 import traceback
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import Annotated, Any
+from typing import Annotated, Any, get_args
 
 import numpy as np
 import typer
+from typer.core import _click
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColumn, TextColumn, TimeRemainingColumn
 from rich.table import Table
 from rich.text import Text
 
 from suctionbench.errors import InputError
+from suctionbench.io import json_safe
+from suctionbench.validate import OPTION_RULES, Rule, os_error_message
+
+
+FINITE = Rule()
+"""A float option without a rule of its own is still finite."""
+
+
+def numeric_type(param: Any) -> type | None:
+    """int or float when `param` takes one number (optional or not), else None."""
+    annotation = getattr(getattr(param, "type_descriptor", None), "annotation", None)
+    kinds = {a for a in (get_args(annotation) or (annotation,)) if a is not type(None)}
+    return kinds.pop() if len(kinds) == 1 and kinds <= {int, float} else None
+
+
+def check_numeric_options(command: Any) -> None:
+    """Give every int / float option of `command` and its subcommands its rule from `OPTION_RULES`,
+    checked as the option is parsed (a usage error: exit 2, one line)."""
+    for param in command.params:
+        kind = numeric_type(param)
+        if kind is None:
+            continue
+        rule = OPTION_RULES.get(param.name or "", FINITE if kind is float else None)
+        if rule is not None:
+            param.callback = _rule_callback(rule, param.callback)
+    for sub in getattr(command, "commands", {}).values():
+        check_numeric_options(sub)
+
+
+def _rule_callback(rule: Rule, then: Callable[..., Any] | None) -> Callable[..., Any]:
+    def callback(ctx: Any, param: Any, value: Any) -> Any:
+        what = param.opts[0] if param.opts else param.name
+        try:
+            value = rule.check(value, what)
+        except InputError as exc:
+            raise _click.exceptions.UsageError(str(exc), ctx) from None
+        return then(ctx, param, value) if then is not None else value
+
+    return callback
 
 
 class ContractGroup(typer.core.TyperGroup):
     """Top-level command group that keeps the CLI contract for usage errors too.
 
-    Click reports a bad option before any command runs; here such errors still exit 2 and, under
-    --json, still end stdout with a JSON object.
+    Click reports a bad option before any command runs; here such errors still exit 2 with one
+    stderr line and, under --json, still end stdout with a JSON object. Every numeric option is
+    checked against its rule (`suctionbench.validate.OPTION_RULES`) while it is parsed.
     """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        check_numeric_options(self)
 
     def main(self, args: Any = None, *pargs: Any, standalone_mode: bool = True, **kwargs: Any) -> Any:
         argv = list(sys.argv[1:] if args is None else args)
         try:
             rv = super().main(argv, *pargs, standalone_mode=False, **kwargs)
-        except typer.core._click.exceptions.ClickException as exc:
+        except _click.exceptions.NoArgsIsHelpError as exc:  # a bare group: its help, as before
             exc.show()
+            rv = exc.exit_code
+        except _click.exceptions.ClickException as exc:
+            error_line(exc.format_message())
             emit({"ok": False, "error": exc.format_message()}, "--json" in argv)
             rv = exc.exit_code
-        except typer.exceptions.Abort:  # Ctrl-C, or a closed pipe under --help
+        except _click.exceptions.Abort:  # Ctrl-C, or a closed pipe under --help
             err.print("aborted")
             rv = 1
         code = rv if isinstance(rv, int) else 0
@@ -70,26 +118,54 @@ JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object on 
 SeedOpt = Annotated[int, typer.Option("--seed", help="Seed of every random draw.")]
 
 def emit(result: dict[str, Any], as_json: bool) -> None:
+    """Under --json, print `result` as one strict JSON line (NaN and infinities become null)."""
     if as_json:
-        print(json.dumps(result, sort_keys=False))
+        print(json.dumps(json_safe(result), sort_keys=False, allow_nan=False))
+
+
+def error_line(message: str, kind: str = "error") -> None:
+    """One stderr line 'error: MESSAGE', the message printed as plain text (never read as markup)."""
+    err.print(Text.assemble((f"{kind}:", "bold red"), " ", " ".join(str(message).split())), highlight=False)
 
 
 def run_command(as_json: bool, body: Callable[[], dict[str, Any]]) -> None:
-    """Run a command body under the CLI contract (exit codes, JSON on the last line)."""
+    """Run a command body under the CLI contract (exit codes, JSON on the last line).
+
+    Bad input (`InputError`), and a file system that refuses a write or a read (disk full, no
+    permission, read-only, a file where a directory must be: an `OSError` with a path), exit 2
+    with one line naming the path; memory exhausted despite the size checks exits 2 too. Anything
+    else is an internal failure: exit 1 with the traceback on stderr.
+    """
     try:
         result = body()
-    except InputError as exc:
-        err.print(f"[bold red]error:[/] {exc}", highlight=False)
-        emit({"ok": False, "error": str(exc)}, as_json)
-        raise typer.Exit(2) from None
     except typer.Exit:
         raise
+    except InputError as exc:
+        fail_input(str(exc), as_json)
+    except OSError as exc:
+        if exc.filename is None:  # not about a file the user named: a bug
+            fail_internal(exc, as_json)
+        fail_input(os_error_message(exc), as_json)
+    except MemoryError:
+        fail_input("out of memory (use smaller sizes)", as_json)
     except Exception as exc:  # an internal failure: say so, with the traceback on stderr
-        err.print(f"[bold red]internal error:[/] {type(exc).__name__}: {exc}", highlight=False)
-        traceback.print_exc(file=sys.stderr)
-        emit({"ok": False, "error": f"internal: {type(exc).__name__}: {exc}"}, as_json)
-        raise typer.Exit(1) from None
+        fail_internal(exc, as_json)
     emit({"ok": True, **result}, as_json)
+
+
+def fail_input(message: str, as_json: bool) -> None:
+    """Exit 2 for bad input: one stderr line, and the JSON error line under --json."""
+    error_line(message)
+    emit({"ok": False, "error": message}, as_json)
+    raise typer.Exit(2) from None
+
+
+def fail_internal(exc: BaseException, as_json: bool) -> None:
+    """Exit 1 for an internal failure, with its traceback on stderr."""
+    error_line(f"{type(exc).__name__}: {exc}", "internal error")
+    traceback.print_exception(exc, file=sys.stderr)
+    emit({"ok": False, "error": f"internal: {type(exc).__name__}: {exc}"}, as_json)
+    raise typer.Exit(1) from None
 
 
 class RateColumn(ProgressColumn):

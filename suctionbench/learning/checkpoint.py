@@ -19,7 +19,6 @@ second, so a card never names weights that are not there yet.
 from __future__ import annotations
 
 import json
-import math
 import platform
 from pathlib import Path
 from typing import Any
@@ -28,7 +27,7 @@ import numpy as np
 import torch
 
 from suctionbench.errors import InputError
-from suctionbench.io import atomic_path, file_digest
+from suctionbench.io import atomic_path, file_digest, json_safe  # noqa: F401  (json_safe: used by train.py)
 from suctionbench.learning.data import NormStats
 from suctionbench.learning.models import IMAGE_SIZE, build_model
 
@@ -48,19 +47,6 @@ def versions() -> dict[str, str]:
 
     return {"suctionbench": __version__, "torch": torch.__version__, "numpy": np.__version__,
             "safetensors": safetensors.__version__, "python": platform.python_version()}
-
-
-def json_safe(value: Any) -> Any:
-    """`value` with NaN / infinities replaced by None (strict JSON has no NaN) and numpy scalars as Python."""
-    if isinstance(value, dict):
-        return {str(k): json_safe(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [json_safe(v) for v in value]
-    if isinstance(value, np.generic):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
 
 
 class GQCNNModel:

@@ -1,0 +1,203 @@
+"""One validation layer for user input: numbers (range, finiteness, sign), sizes (memory and disk
+estimated before anything is allocated or written) and input files (exists, right kind, readable,
+not empty). Every check raises `InputError` with one line naming the input and what is wrong.
+
+The CLI applies `OPTION_RULES` to every numeric option of every command by its name
+(`suctionbench.cli.common`), so a new command's ``--seed`` or ``--workers`` is checked the same way
+as the old ones; library functions call the same checks for the values they receive.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from suctionbench.errors import InputError
+
+SEED_MAX = 2**32 - 1
+"""Seeds are integers in [0, SEED_MAX]: what numpy's legacy and torch's generators both accept."""
+
+COUNT_MAX = 10**9
+"""No count option (trials, datapoints, grasps, epochs, ...) is meaningful beyond a billion; sizes
+below it are still checked against the machine's memory and disk by `require_memory` / `require_disk`."""
+
+
+@dataclass(frozen=True)
+class Rule:
+    """The valid values of one numeric option."""
+
+    low: float | None = None
+    """Smallest valid value (None: unbounded)."""
+
+    high: float | None = None
+    """Largest valid value (None: unbounded)."""
+
+    low_open: bool = False
+    """The value must be strictly greater than `low`."""
+
+    meaning: str = ""
+    """Why the bounds are what they are, appended to the message (e.g. '0 = all cores')."""
+
+    def check(self, value: Any, what: str) -> Any:
+        """`value` if it satisfies the rule, else InputError naming `what` (e.g. '--trials')."""
+        if value is None:
+            return value
+        if isinstance(value, float) and not math.isfinite(value):
+            raise InputError(f"{what} {value}: must be a finite number")
+        note = f" ({self.meaning})" if self.meaning else ""
+        if self.low is not None and (value <= self.low if self.low_open else value < self.low):
+            bound = f"greater than {_num(self.low)}" if self.low_open else f"at least {_num(self.low)}"
+            raise InputError(f"{what} {_num(value)}: must be {bound}{note}")
+        if self.high is not None and value > self.high:
+            raise InputError(f"{what} {_num(value)}: must be at most {_num(self.high)}{note}")
+        return value
+
+
+def _num(value: float) -> str:
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+COUNT = Rule(1, COUNT_MAX)
+CORES = Rule(0, 4096, meaning="0 = all cores")
+
+OPTION_RULES: dict[str, Rule] = {
+    # seeds and parallelism
+    "seed": Rule(0, SEED_MAX, meaning="seeds are non-negative integers"),
+    "workers": CORES,
+    "cores": CORES,
+    # counts
+    "trials": COUNT, "datapoints": COUNT, "grasps": COUNT, "grasps_per_object": COUNT, "samples": COUNT,
+    "epochs": COUNT, "batch_size": Rule(1, 2**20), "max_datapoints": COUNT, "count": COUNT, "scenes": COUNT,
+    "episodes": COUNT, "memory_grasps": COUNT, "reference_grasps": Rule(0, COUNT_MAX),
+    "top": Rule(0, COUNT_MAX, meaning="rows of the table; 0 = none"),
+    # physical quantities and thresholds
+    "mass": Rule(0.0, 1000.0, low_open=True, meaning="kg"),
+    "threshold": Rule(0.0, 1.0, meaning="a robust wrench resistance"),
+}
+"""Rule of each numeric CLI option, by parameter name. Every int or float option of every command
+must have one (tests/test_fuzz.py checks this); a float option is finite in any case."""
+
+
+# -- sizes -----------------------------------------------------------------------------------------
+
+
+def available_memory() -> int:
+    """Bytes of memory the machine can still give (MemAvailable), or its physical size if unknown."""
+    try:
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return 2**63
+
+
+def _bytes(n: float) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if n < 1024 or unit == "PiB":
+            return f"{n:.3g} {unit}"
+        n /= 1024
+    return f"{n:.3g} B"
+
+
+def require_memory(nbytes: float, what: str) -> None:
+    """InputError if `what` (e.g. '--grasps 1e12 x --samples 50') needs more memory than is available."""
+    free = available_memory()
+    if nbytes > free:
+        raise InputError(f"{what}: needs about {_bytes(nbytes)} of memory, this machine has {_bytes(free)} "
+                         "available (use fewer)")
+
+
+def require_disk(path: str | Path, nbytes: float, what: str) -> None:
+    """InputError if writing about `nbytes` under `path` (its nearest existing ancestor's file system)
+    would not fit: `what` names the options behind the size."""
+    probe = Path(path).absolute()
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    try:
+        free = shutil.disk_usage(probe).free
+    except OSError:
+        return
+    if nbytes > free:
+        raise InputError(f"{what}: needs about {_bytes(nbytes)} of disk under '{path}', {_bytes(free)} free "
+                         "(use fewer or another directory)")
+
+
+# -- files -----------------------------------------------------------------------------------------
+
+
+def input_file(path: str | Path, what: str, *, suffixes: tuple[str, ...] = ()) -> Path:
+    """`path` as an existing, readable, non-empty regular file; InputError naming `what` otherwise."""
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{what} '{path}': not found")
+    if not path.is_file():
+        raise InputError(f"{what} '{path}': not a file")
+    if suffixes and path.suffix.lower() not in suffixes:
+        raise InputError(f"{what} '{path}': expected a {', '.join(suffixes)} file")
+    try:
+        with open(path, "rb") as fh:
+            first = fh.read(1)
+    except OSError as exc:
+        raise InputError(f"{what} '{path}': cannot read ({exc.strerror})") from None
+    if not first:
+        raise InputError(f"{what} '{path}': empty file")
+    return path
+
+
+def input_dir(path: str | Path, what: str) -> Path:
+    """`path` as an existing directory; InputError naming `what` otherwise."""
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{what} '{path}': not found")
+    if not path.is_dir():
+        raise InputError(f"{what} '{path}': not a directory")
+    return path
+
+
+def output_dir(path: str | Path, what: str) -> Path:
+    """`path` usable as an output directory: absent (its parent chain creatable) or a directory."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise InputError(f"{what} '{path}': exists and is not a directory")
+    for parent in path.absolute().parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise InputError(f"{what} '{path}': '{parent}' is a file, not a directory")
+            break
+    return path
+
+
+def output_file(path: str | Path, what: str) -> Path:
+    """`path` usable as an output file: not a directory, and no file where a parent directory must be."""
+    path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{what} '{path}': is a directory, expected a file name")
+    output_dir(path.parent, what)
+    return path
+
+
+_OS_HINTS = {
+    "ENOSPC": "disk full: free space or write elsewhere",
+    "EDQUOT": "disk quota exceeded: free space or write elsewhere",
+    "EROFS": "read-only file system: write elsewhere",
+    "EACCES": "no permission: write elsewhere or fix the permissions",
+    "EPERM": "not permitted: write elsewhere or fix the permissions",
+    "ENOTDIR": "a file stands where a directory must be",
+}
+
+
+def os_error_message(exc: OSError) -> str:
+    """One line for a file-system error that names the path (disk full, permission, read-only, ...)."""
+    import errno
+
+    hint = _OS_HINTS.get(errno.errorcode.get(exc.errno or 0, ""), "")
+    reason = exc.strerror or type(exc).__name__
+    return f"'{exc.filename}': {reason}" + (f" ({hint})" if hint else "")

@@ -64,3 +64,22 @@ def test_eval_rejects_an_unknown_camera_before_writing(tmp_path):
     with pytest.raises(InputError, match="missing key"):
         run_eval(Task(name="basic", set="basic", trials=1), "centroid", tmp_path / "run", camera=str(bad))
     assert not (tmp_path / "run").exists()
+
+
+def test_cameras_command_lists_presets_and_prints_a_template(tmp_path):
+    from typer.testing import CliRunner
+
+    from suctionbench.cli import app
+
+    listed = CliRunner().invoke(app, ["cameras", "--json"])
+    assert listed.exit_code == 0
+    rows = json.loads(listed.stdout.strip().splitlines()[-1])["cameras"]
+    assert [r["name"] for r in rows] == list(CAMERA_PRESETS) and sum(r["default"] for r in rows) == 1
+    human = CliRunner().invoke(app, ["cameras"])
+    assert human.exit_code == 0 and all(name in human.stdout for name in CAMERA_PRESETS)
+    assert max(len(line) for line in human.stdout.splitlines()) <= 80
+    template = CliRunner().invoke(app, ["cameras", "--toml", "realsense-d435"])
+    (tmp_path / "mine.toml").write_text(template.stdout)  # stdout is the TOML alone: `> mine.toml` works
+    assert load_intrinsics_toml(tmp_path / "mine.toml") == REALSENSE_D435
+    bad = CliRunner().invoke(app, ["cameras", "--toml", "kinect-9", "--json"])
+    assert bad.exit_code == 2 and "unknown" in json.loads(bad.stdout.strip().splitlines()[-1])["error"]

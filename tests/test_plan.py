@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -236,3 +237,49 @@ def test_on_images_the_project_renders(key):
     assert (mask & truth).sum() / (mask | truth).sum() > 0.9
     u, v = (int(round(x)) for x in result.action.pixel)
     assert truth[v, u]
+
+
+def _last_json(output: str) -> dict:
+    return json.loads(output.strip().splitlines()[-1])
+
+
+def test_plan_command_prints_the_grasp_and_draws_it(tmp_path):
+    from typer.testing import CliRunner
+
+    from suctionbench.cli import app
+
+    image = Path(__file__).resolve().parents[1] / "examples" / "scene_mug.png"
+    out = tmp_path / "grasp.png"
+    args = ["plan", "--depth", str(image), "--camera", "primesense", "--policy", "centroid",
+            "--policy-arg", "num_candidates=50", "--out", str(out), "--seed", "3"]
+    result = CliRunner().invoke(app, [*args, "--json"])
+    assert result.exit_code == 0, result.output
+    data = _last_json(result.stdout)
+    assert data["ok"] and data["policy"] == "centroid(num_candidates=50)" and data["candidates"] == 50
+    assert len(data["point"]) == 3 and abs(np.linalg.norm(data["approach"]) - 1) < 1e-5
+    assert data["plane"]["inlier_fraction"] > 0.7 and data["camera_pose"] == "fitted"
+    assert Image.open(out).size == (640, 480)
+    again = _last_json(CliRunner().invoke(app, [*args, "--json"]).stdout)
+    assert again["point"] == data["point"] and again["pixel"] == data["pixel"]  # --seed: same grasp
+    human = CliRunner().invoke(app, args)
+    assert human.exit_code == 0 and "approach (camera frame)" in human.stdout and "q = " in human.stdout
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--depth", "missing.npy", "--camera", "primesense"], "not found"),
+    (["--depth", "EXAMPLE", "--camera", "kinect-9"], "unknown"),
+    (["--depth", "EXAMPLE", "--camera", "primesense", "--policy-arg", "x"], "key=value"),
+    (["--depth", "EXAMPLE", "--camera", "primesense", "--policy", "nowhere.py:make"], "not found"),
+    (["--depth", "EXAMPLE", "--camera", "realsense-d435"], "give the camera's intrinsics"),
+    (["--depth", "EXAMPLE", "--camera", "primesense", "--depth-scale", "-1"], "positive"),
+])
+def test_plan_command_bad_input_exits_2_with_one_line(args, message):
+    from typer.testing import CliRunner
+
+    from suctionbench.cli import app
+
+    image = str(Path(__file__).resolve().parents[1] / "examples" / "scene_mug.png")
+    result = CliRunner().invoke(app, ["plan", *[image if a == "EXAMPLE" else a for a in args], "--json"])
+    assert result.exit_code == 2, result.output
+    data = _last_json(result.stdout)
+    assert not data["ok"] and message in data["error"] and "\n" not in data["error"]

@@ -130,6 +130,29 @@ def require_disk(path: str | Path, nbytes: float, what: str) -> None:
                          "(use fewer or another directory)")
 
 
+BYTES_PER_SAMPLE = 100e6 / 8192
+"""Peak working memory of one perturbation sample of the robust labeller (its chunks of
+`suctionbench.contact.robust.CHUNK_SAMPLES` samples take ~100 MB)."""
+
+BYTES_PER_GRASP = 1024
+"""Memory per labelled grasp besides its samples: point, approach, frame, seal and wrench results."""
+
+BYTES_PER_DATAPOINT = 2 * (32 * 32 * 4 + 16 * 4)
+"""Disk per generated datapoint, uncompressed: the thumbnail and its pose and labels, once in the
+generation units and once in the shards."""
+
+BYTES_PER_TRIAL_LOG = 1.5e6
+"""Disk per eval trial: its MCAP log (about 1.3 MB with a 640 x 480 depth image)."""
+
+
+def label_memory(grasps: int, samples: int) -> float:
+    """Bytes the robust labeller needs for `grasps` grasps of `samples` samples each."""
+    from suctionbench.contact.robust import CHUNK_SAMPLES
+
+    chunk = min(grasps * samples, max(samples, CHUNK_SAMPLES))
+    return grasps * (samples + BYTES_PER_GRASP) + chunk * BYTES_PER_SAMPLE
+
+
 # -- files -----------------------------------------------------------------------------------------
 
 
@@ -162,16 +185,22 @@ def input_dir(path: str | Path, what: str) -> Path:
     return path
 
 
+def _file_in_the_way(path: Path) -> Path | None:
+    """The nearest existing ancestor of `path` if it is a file (so `path` cannot be created), else None."""
+    for parent in path.absolute().parents:
+        if parent.exists():
+            return None if parent.is_dir() else parent
+    return None
+
+
 def output_dir(path: str | Path, what: str) -> Path:
-    """`path` usable as an output directory: absent (its parent chain creatable) or a directory."""
+    """`path` usable as an output directory: absent (creatable) or a directory."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise InputError(f"{what} '{path}': exists and is not a directory")
-    for parent in path.absolute().parents:
-        if parent.exists():
-            if not parent.is_dir():
-                raise InputError(f"{what} '{path}': '{parent}' is a file, not a directory")
-            break
+    blocker = _file_in_the_way(path)
+    if blocker is not None:
+        raise InputError(f"{what} '{path}': '{blocker}' is a file, not a directory")
     return path
 
 
@@ -180,7 +209,9 @@ def output_file(path: str | Path, what: str) -> Path:
     path = Path(path)
     if path.is_dir():
         raise InputError(f"{what} '{path}': is a directory, expected a file name")
-    output_dir(path.parent, what)
+    blocker = _file_in_the_way(path)
+    if blocker is not None:
+        raise InputError(f"{what} '{path}': '{blocker}' is a file, not a directory")
     return path
 
 

@@ -19,7 +19,7 @@ from suctionbench.cli.common import (
     resolve_workers,
     run_command,
 )
-from suctionbench.errors import InputError
+from suctionbench.validate import BYTES_PER_DATAPOINT, label_memory, output_dir, require_disk, require_memory
 
 
 @app.command()
@@ -45,8 +45,10 @@ def generate(
         from suctionbench.dataset.generate import GenerationConfig, generate_dataset
         from suctionbench.objects.registry import resolve_objects
 
-        if grasps_per_object < 1:
-            raise InputError(f"--grasps-per-object {grasps_per_object}: must be at least 1")
+        output_dir(out, "--out")
+        require_disk(out, datapoints * BYTES_PER_DATAPOINT, f"--datapoints {datapoints}")
+        require_memory(label_memory(grasps_per_object, LabelConfig().perturbation.num_samples)
+                       * resolve_workers(workers), f"--grasps-per-object {grasps_per_object} x --workers")
         records = resolve_objects(objects)
         config = GenerationConfig(
             datapoints=datapoints, seed=seed, grasps_per_object=grasps_per_object,
@@ -81,8 +83,10 @@ def dataset_show(
 
     def body() -> dict[str, Any]:
         from suctionbench.dataset.storage import DatasetReader, read_card
+        from suctionbench.dataset.verify import check_dataset
         from suctionbench.learning.data import label_threshold
 
+        check_dataset(directory)  # manifests, hashes, shapes, finite labels, splits: else exit 2
         card = read_card(directory)
         reader = DatasetReader(directory)
         summary = {

@@ -14,6 +14,7 @@ from rich.table import Table
 
 from suctionbench.cli.common import JsonOpt, SeedOpt, app, err, parse_vector, progress_bar, run_command
 from suctionbench.errors import InputError
+from suctionbench.validate import label_memory, output_file, require_memory
 
 MAX_GRASP_OFFSET = 0.005
 """A --grasp point farther than this (m) from the mesh surface is rejected as a typo."""
@@ -47,12 +48,11 @@ def label(
 
         if (grasp is None) == (grasps is None):
             raise InputError("give exactly one of --grasp x,y,z,vx,vy,vz or --grasps N")
-        if grasps is not None and grasps < 1:
-            raise InputError(f"--grasps {grasps}: must be at least 1")
         if out is not None and grasps is None:
             raise InputError("--out needs --grasps (a single --grasp is printed, not written)")
-        if top < 0:
-            raise InputError(f"--top {top}: must be >= 0")
+        if out is not None:
+            output_file(out, "--out")
+        require_memory(label_memory(grasps or 1, samples), f"--grasps {grasps or 1} x --samples {samples}")
         config = LabelConfig(
             cup=cup_preset(cup), perturbation=replace(PerturbationConfig(), num_samples=samples)
         )

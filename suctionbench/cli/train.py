@@ -61,8 +61,11 @@ def train_cmd(
     def body() -> dict[str, Any]:
         import shlex
 
+        from suctionbench.dataset.verify import check_dataset
         from suctionbench.learning.data import AUGMENT_GQCNN, AUGMENT_OFF
         from suctionbench.learning.train import TrainConfig, train
+
+        check_dataset(dataset)  # never train on a damaged dataset or NaN labels
 
         config = TrainConfig(arch=arch, epochs=epochs, device=device, split=split, batch_size=batch_size,
                              max_train_datapoints=max_datapoints, augment=AUGMENT_GQCNN if augment else AUGMENT_OFF,

@@ -264,9 +264,9 @@ def generate_dataset(
         except InputError:
             existing = None
         if overwrite:
-            import shutil
+            from suctionbench.dataset.verify import remove_dataset
 
-            shutil.rmtree(out)
+            remove_dataset(out)  # only a dataset suctionbench wrote; refuses otherwise
         elif not resume:
             raise InputError(f"output '{out}' exists (pass --resume to continue it or --overwrite to replace it)")
         elif existing not in (None, fingerprint):

@@ -17,16 +17,15 @@ from typing import Annotated, Any, get_args
 
 import numpy as np
 import typer
-from typer.core import _click
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColumn, TextColumn, TimeRemainingColumn
 from rich.table import Table
 from rich.text import Text
+from typer.core import _click
 
 from suctionbench.errors import InputError
 from suctionbench.io import json_safe
 from suctionbench.validate import OPTION_RULES, Rule, os_error_message
-
 
 FINITE = Rule()
 """A float option without a rule of its own is still finite."""

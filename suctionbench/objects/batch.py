@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from suctionbench.objects.build import ObjectRecord, build_object
 from suctionbench.objects.spec import ObjectSpec
+from suctionbench.parallel import process_pool
 
 
 def _build_one(args: tuple[ObjectSpec, Path, bool]) -> ObjectRecord:
@@ -34,7 +34,7 @@ def build_specs(
             if progress:
                 progress(1)
         return records
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    with process_pool(workers) as pool:
         for record in pool.map(_build_one, jobs, chunksize=1):
             records.append(record)
             if progress:

@@ -27,7 +27,7 @@ $(DEVSTAMP): $(STAMP)
 
 # The main job: a short benchmark run of the GQ-CNN policy with the shipped model, then its report.
 demo: $(STAMP)
-	$(SB) eval --policy gqcnn --task smoke --seed 0 --out $(DEMO)
+	$(SB) eval --policy gqcnn --task smoke --seed 0 --out $(DEMO) --overwrite
 	$(SB) report $(DEMO) --out $(DEMO)/report > /dev/null
 	@echo ""
 	@echo "Report: $(DEMO)/report/index.html (and report.md), rebuilt from the run logs by"

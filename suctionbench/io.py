@@ -1,4 +1,5 @@
-"""Atomic file writes: a reader never sees a half-written file, an interrupted run leaves none."""
+"""Atomic writes: a reader never sees a half-written file or directory, an interrupted run leaves
+none in place of the output (files: temp file + rename; directories: temp sibling + rename)."""
 
 from __future__ import annotations
 
@@ -6,8 +7,9 @@ import contextlib
 import hashlib
 import math
 import os
+import shutil
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -59,6 +61,50 @@ def save_npz(path: str | Path, **arrays: np.ndarray) -> None:
     """np.savez_compressed, atomically."""
     with atomic_path(path) as tmp, open(tmp, "wb") as fh:
         np.savez_compressed(fh, **arrays)
+
+
+def publish_dir(staging: str | Path, out: str | Path) -> None:
+    """Move the finished directory `staging` to `out` (a sibling): one rename when `out` is absent,
+    else the old `out` is renamed aside first and deleted after; never a mix of old and new."""
+    staging, out = Path(staging), Path(out)
+    if out.is_dir() and not any(out.iterdir()):
+        out.rmdir()
+    if not out.exists():
+        os.replace(staging, out)
+        return
+    trash = out.with_name(f".{out.name}.replaced-{os.getpid()}")
+    shutil.rmtree(trash, ignore_errors=True)
+    os.replace(out, trash)
+    os.replace(staging, out)
+    shutil.rmtree(trash, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def atomic_dir(out: str | Path, refuse: Callable[[Path], str | None]) -> Iterator[Path]:
+    """Yield an empty temporary sibling of directory `out` to write into; on success it replaces
+    `out` (`publish_dir`), on failure it is deleted and `out` is untouched.
+
+    `refuse(out)` is asked first when `out` exists and is not empty: a reason (the directory holds
+    files this program did not write) raises InputError, so nothing of the user's is replaced.
+    """
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"output '{out}': exists and is not a directory")
+    if out.is_dir() and any(out.iterdir()):
+        reason = refuse(out)
+        if reason:
+            raise InputError(f"output '{out}': {reason}; nothing replaced (choose another directory)")
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent))
+        os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes 0700 directories; use the usual mode
+    except OSError as exc:
+        raise InputError(f"output '{out}': cannot write there ({exc.strerror})") from None
+    try:
+        yield staging
+        publish_dir(staging, out)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
 
 
 def json_safe(value: Any) -> Any:

@@ -37,9 +37,14 @@ def eval_cmd(
     ] = "primesense",
     policy_arg: PolicyArgOpt = None,
     seed: Annotated[int | None, typer.Option(help="Base seed of the trials (default: the task's).")] = None,
+    resume: Annotated[bool, typer.Option(help="Finish an interrupted run (OUT.incomplete) of the same "
+                                              "configuration.")] = False,
+    overwrite: Annotated[bool, typer.Option(help="Replace a run already in --out (or an interrupted one).")] = False,
     as_json: JsonOpt = False,
 ) -> None:
-    """Run the benchmark: seeded trials in simulation, one MCAP log each, and the paper-style table."""
+    """Run the benchmark: seeded trials in simulation, one MCAP log each, and the paper-style table.
+
+    The run appears in --out only when every trial is logged (until then it is OUT.incomplete)."""
 
     def body() -> dict[str, Any]:
         from suctionbench.evaluation.runner import run_eval
@@ -63,7 +68,8 @@ def eval_cmd(
             with progress_bar(count, f"{policy} {m if len(metrics) > 1 else ''}".strip(), not as_json) as advance:
                 runs[m] = run_eval(the_task, policy, run_dir, model=model, trials=trials, seed=seed,
                                    workers=resolve_workers(workers), engine=engine, address=address,
-                                   metric=m, cup=cup, camera=camera, policy_args=options, progress=advance)
+                                   metric=m, cup=cup, camera=camera, policy_args=options, resume=resume,
+                                   overwrite=overwrite, progress=advance)
         if not as_json:
             known = bool(the_task.metrics)  # the paper's known-objects table: accuracy and Spearman too
             rows = [{"policy": r["label"], "set": r["set"],  # short headers: 80 columns hold the table
@@ -86,6 +92,8 @@ def report(
         list[Path], typer.Argument(help="Run directories from `suctionbench eval`, or directories holding runs.")
     ],
     out: Annotated[Path, typer.Option(help="Report directory (index.html, report.md, figures).")],
+    allow_incomplete: Annotated[bool, typer.Option(help="Report interrupted runs, marked incomplete, instead of "
+                                                        "refusing them.")] = False,
     as_json: JsonOpt = False,
 ) -> None:
     """HTML + Markdown report of eval runs: tables, PR and success-attempt curves, failures."""
@@ -93,7 +101,7 @@ def report(
     def body() -> dict[str, Any]:
         from suctionbench.evaluation.report import build_report
 
-        result = build_report(run_dirs, out)
+        result = build_report(run_dirs, out, allow_incomplete=allow_incomplete)
         if not as_json:
             for title, rows in result["tables"].items():
                 print_rows(title, rows)

@@ -18,8 +18,18 @@ import numpy as np
 
 from suctionbench.errors import InputError
 from suctionbench.evaluation.paper import CITATION, PAPER_KNOWN, PAPER_RANDOM, PAPER_RESULTS
-from suctionbench.evaluation.runner import run_records, summarize_run
-from suctionbench.io import atomic_path
+from suctionbench.evaluation.runner import (
+    INCOMPLETE_SUFFIX,
+    describe_status,
+    not_a_report,
+    read_run_json,
+    run_records,
+    run_status,
+    staging_dir,
+    summarize_run,
+)
+from suctionbench.io import atomic_dir, atomic_path
+from suctionbench.validate import output_dir
 
 __all__ = ["PAPER_KNOWN", "PAPER_RANDOM", "PAPER_RESULTS", "build_report", "expand_run_dirs",
            "success_attempt_curve"]
@@ -52,6 +62,8 @@ def expand_run_dirs(paths: list[Path]) -> list[Path]:
         raise InputError("report: give at least one run directory")
     runs = []
     for path in map(Path, paths):
+        if not path.exists() and staging_dir(path).is_dir():
+            path = staging_dir(path)  # an interrupted eval: reported as such, not as 'not found'
         found = [path] if (path / "run.json").is_file() else sorted(p.parent for p in path.glob("**/run.json"))
         if not found:
             raise InputError(f"run '{path}': no run.json in it or below it (not a suctionbench eval run)")
@@ -109,9 +121,10 @@ def _tables(summaries: list[dict[str, Any]]) -> list[Table]:
     for s in summaries:
         label = s["label"]
         success = _percent(s["success_rate"])
+        mark = "" if s.get("complete", True) else f" (incomplete {s['trials']}/{s['expected_trials']})"
         if s["policy"] == "analytic":
             paper = PAPER_KNOWN.get(s["metric"]) if s["set"] == "adversarial" else None
-            known.rows.append({"metric": s["metric"], "set": s["set"], "trials": s["trials"],
+            known.rows.append({"metric": s["metric"] + mark, "set": s["set"], "trials": s["trials"],
                                "AP %": _percent(s["ap"]), "success %": success,
                                "paper AP / success %": f"{paper[0]} / {paper[1]}" if paper else "-",
                                "success - paper (points)": _delta(success, paper and paper[1])})
@@ -119,14 +132,14 @@ def _tables(summaries: list[dict[str, Any]]) -> list[Table]:
             for metric, stats in s["by_metric"].items():
                 paper = PAPER_RANDOM.get(metric) if s["set"] == "adversarial" else None
                 classified.rows.append({
-                    "metric": metric, "set": s["set"], "grasps": s["trials"], "successes": round(
+                    "metric": metric + mark, "set": s["set"], "grasps": s["trials"], "successes": round(
                         s["success_rate"] * (s["trials"] - s["invalid"])),
                     "AP %": _percent(stats["ap"]), "accuracy %": _percent(stats["accuracy"]),
                     "Spearman": stats["spearman"],
                     "paper AP / acc. % / Spearman": f"{paper[0]} / {paper[1]} / {paper[2]}" if paper else "-"})
         else:
             paper = PAPER_RESULTS.get(s["policy"], {}).get(s["set"])
-            novel.rows.append({"policy": s["policy"], "set": s["set"], "trials": s["trials"],
+            novel.rows.append({"policy": s["policy"] + mark, "set": s["set"], "trials": s["trials"],
                                "AP %": _percent(s["ap"]), "success %": success,
                                "label precision %": _percent(s["label_precision"]),
                                "picks/hour": s["picks_per_hour"],
@@ -143,9 +156,40 @@ def _tables(summaries: list[dict[str, Any]]) -> list[Table]:
     return [t for t in (novel, known, classified, timing) if t.rows]
 
 
-def build_report(run_dirs: list[Path], out: Path, command: str | None = None) -> dict[str, Any]:
+def build_report(run_dirs: list[Path], out: Path, command: str | None = None,
+                 allow_incomplete: bool = False) -> dict[str, Any]:
     """Write out/report.md, out/index.html and the figures; returns the tables. `command` is the
-    command line that built the report (shown at the bottom; default: this process's)."""
+    command line that built the report (shown at the bottom; default: this process's).
+
+    A run whose trial logs do not match its run.json (killed, or stray logs) is refused, or with
+    `allow_incomplete` reported with "(incomplete k/n)" after its name and listed under
+    "incomplete" in the result. The report is written to a temporary sibling of `out` and renamed
+    into place at the end (all or nothing); an `out` that holds anything but an old report is
+    refused."""
+    run_dirs = expand_run_dirs(run_dirs)
+    incomplete = []
+    for run_dir in run_dirs:
+        status = run_status(run_dir)
+        if not status["complete"] or run_dir.name.endswith(INCOMPLETE_SUFFIX):
+            if not allow_incomplete:
+                raise InputError(describe_status(run_dir, status) + "; or pass --allow-incomplete")
+            incomplete.append({"run": str(run_dir), **status})
+    output_dir(out, "--out")
+    all_records = [run_records(run_dir) for run_dir in run_dirs]  # each log is read once
+    summaries = [summarize_run(run_dir, records) for run_dir, records in zip(run_dirs, all_records, strict=True)]
+    for s, run_dir in zip(summaries, run_dirs, strict=True):
+        if any(i["run"] == str(run_dir) for i in incomplete):
+            s["complete"] = False
+            s["label"] += f" (incomplete {s['trials']}/{s['expected_trials']})"
+    final = Path(out)
+    with atomic_dir(final, not_a_report) as out:
+        result = _write_report(run_dirs, summaries, all_records, out, command)
+    return {"out": str(final), **result, "incomplete": incomplete}
+
+
+def _write_report(run_dirs: list[Path], summaries: list[dict[str, Any]], all_records: list[list[dict[str, Any]]],
+                  out: Path, command: str | None) -> dict[str, Any]:
+    """The report's files in `out` (a fresh directory); returns the tables and figure names."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -154,13 +198,6 @@ def build_report(run_dirs: list[Path], out: Path, command: str | None = None) ->
     from suctionbench.evaluation.figures import headline_figure
     from suctionbench.learning.metrics import precision_recall_curve
 
-    run_dirs = expand_run_dirs(run_dirs)
-    all_records = [run_records(run_dir) for run_dir in run_dirs]  # each log is read once
-    summaries = [summarize_run(run_dir, records) for run_dir, records in zip(run_dirs, all_records, strict=True)]
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InputError(f"output '{out}': cannot create it ({exc.strerror})") from None
     galleries, per_object = [], {}
     curves: dict[str, list[tuple[str, np.ndarray, np.ndarray]]] = {}  # figure group -> (label, q, success)
     for run_dir, summary, records in zip(run_dirs, summaries, all_records, strict=True):
@@ -207,8 +244,8 @@ def build_report(run_dirs: list[Path], out: Path, command: str | None = None) ->
               "report_command": command or " ".join(["suctionbench", *map(_quote, sys.argv[1:])])}
     _write_markdown(out, tables, figures, objects, galleries, footer)
     _write_html(out, tables, figures, objects, galleries, footer)
-    return {"out": str(out), "tables": {t.title: t.rows for t in tables},
-            "rows": tables[0].rows if tables else [], "figures": figures}
+    return {"tables": {t.title: t.rows for t in tables}, "rows": tables[0].rows if tables else [],
+            "figures": figures}
 
 
 def _quote(arg: str) -> str:
@@ -217,9 +254,8 @@ def _quote(arg: str) -> str:
 
 def _run_info(run_dir: Path, summary: dict[str, Any]) -> dict[str, Any]:
     """What the bottom of the report says about a run: label, set, trials, seed, camera, command."""
-    import json
 
-    run = json.loads((Path(run_dir) / "run.json").read_text())
+    run = read_run_json(Path(run_dir))
     return {"run": f"{summary['label']} / {summary['set']}", "trials": summary["trials"], "seed": run.get("seed"),
             "camera": run.get("camera", "primesense"), "cup": run.get("cup"),
             "command": run.get("command") or "-", "versions": run.get("versions") or {}}

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -16,7 +17,8 @@ import numpy as np
 from suctionbench.errors import InputError
 from suctionbench.evaluation.cycle import CYCLE_MODEL, modelled_compute, picks_per_hour
 from suctionbench.evaluation.tasks import Task
-from suctionbench.io import atomic_path
+from suctionbench.io import atomic_path, json_safe, publish_dir
+from suctionbench.validate import BYTES_PER_TRIAL_LOG, output_dir, require_disk
 
 PREDICT_THRESHOLD = 0.5
 """An analytic label (rwr) above this predicts success, for the label-precision column."""
@@ -77,7 +79,7 @@ def run_trial(trial: Trial, log_dir: str) -> dict[str, Any]:
 def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, trials: int | None = None,
              seed: int | None = None, workers: int = 1, engine: str = "local", address: str | None = None,
              metric: str = "rwr", cup: str = "default", policy_args: dict[str, Any] | None = None,
-             camera: str = "primesense", command: str | None = None,
+             camera: str = "primesense", command: str | None = None, resume: bool = False, overwrite: bool = False,
              progress: Callable[[int], None] | None = None) -> dict[str, Any]:
     """Run the trials into out/ (trials/*.mcap + run.json) and return the summary from the logs.
 
@@ -85,7 +87,13 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
     PATH.py:FACTORY, package.module:FACTORY) with `policy_args` as its factory's options; it is
     built once here, so that a bad spec or option fails before any work, and then again in each
     worker from its spec string. `camera` is a preset name or an intrinsics TOML file. run.json
-    records the policy's label (spec and options), the camera, `command` and the versions."""
+    records the policy's label (spec and options), the camera, `command` and the versions.
+
+    The run is written into the sibling ``OUT.incomplete`` and renamed to `out` once every trial
+    is logged, so `out` is a complete run or absent. A killed run stays in ``OUT.incomplete``:
+    `resume` finishes it (same configuration; finished trial logs are kept, unfinished ones
+    redone), `overwrite` starts it over. An existing run in `out` is replaced only with
+    `overwrite`, and only if it is a run (run.json and trial logs, nothing else)."""
     from suctionbench.policies.plugins import builtin_name, canonical_spec, load_policy, policy_label
     from suctionbench.sensing.camera import resolve_camera
 
@@ -114,27 +122,188 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
         raise InputError(f"--metric '{metric}' is unknown (known: {', '.join(METRICS)})")
     cup_preset(cup)  # unknown preset -> InputError
     check_engine(engine)
+    out = output_dir(out, "--out")
+    count = trials or task.trials
+    require_disk(out, count * BYTES_PER_TRIAL_LOG, f"{count} trials")  # before planning them
     planned = plan_trials(task, spec, model=model, trials=trials, seed=seed, metric=metric, cup=cup,
                           policy_args=policy_args, camera=camera_spec)
-    out = Path(out)
-    log_dir = out / "trials"
-    try:
-        log_dir.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InputError(f"output '{out}': cannot create it ({exc.strerror})") from None
+    staging = staging_dir(out)
+    if out.is_dir() and any(out.iterdir()):
+        if not overwrite:
+            raise InputError(f"--out '{out}': not empty (a finished run? pass --overwrite to replace a run, or "
+                             "choose another --out)")
+        check_removable_run(out)
     run = {"task": asdict(task), "policy": label, "policy_spec": spec, "policy_args": policy_args, "model": model,
            "metric": metric, "cup": cup, "camera": intrinsics.name, "trials": len(planned),
            "seed": seed if seed is not None else task.seed, "compute_model": CYCLE_MODEL.compute_time(spec),
            "command": command, "versions": _versions()}
-    with atomic_path(out / "run.json") as tmp:
-        tmp.write_text(json.dumps(run, indent=1))
+    if staging.exists():
+        if overwrite:
+            remove_run(staging)
+        elif not resume:
+            raise InputError(f"--out '{out}': an interrupted run is in '{staging}' (pass --resume to finish it or "
+                             "--overwrite to start over)")
+        else:
+            _check_same_run(staging, run)
+    log_dir = staging / "trials"
+    log_dir.mkdir(parents=True, exist_ok=True)
+    for stale in log_dir.glob(".*.part"):  # logs a killed run did not finish: those trials run again
+        stale.unlink()
+    with atomic_path(staging / "run.json") as tmp:
+        tmp.write_text(json.dumps(json_safe(run), indent=1, allow_nan=False))
+    todo = [t for t in planned if not (log_dir / trial_log_name(t.index)).is_file()]
+    if progress and len(todo) < len(planned):
+        progress(len(planned) - len(todo))
     from suctionbench.parallel import map_ordered
 
-    for _ in map_ordered(run_trial, [(t, str(log_dir)) for t in planned], engine=engine, workers=workers,
+    for _ in map_ordered(run_trial, [(t, str(log_dir)) for t in todo], engine=engine, workers=workers,
                          address=address):
         if progress:
             progress(1)
+    status = run_status(staging)
+    if not status["complete"]:
+        raise RuntimeError(f"run '{staging}' is incomplete after all its trials ran: {status}")
+    publish_dir(staging, out)
     return summarize_run(out)
+
+
+INCOMPLETE_SUFFIX = ".incomplete"
+RUN_NAME = "run.json"
+TRIAL_DIR = "trials"
+_TRIAL_RE = re.compile(r"^trial_(\d{5,})\.mcap$")
+_IDENTITY_SKIP = ("command", "versions")
+"""run.json entries that may differ between a run and its resumption."""
+
+
+def staging_dir(out: Path) -> Path:
+    """Where a run is written until its last trial is logged: the sibling ``OUT.incomplete``."""
+    out = Path(out)
+    return out.with_name(out.name + INCOMPLETE_SUFFIX)
+
+
+def trial_log_name(index: int) -> str:
+    return f"trial_{index:05d}.mcap"
+
+
+def read_run_json(run_dir: Path) -> dict[str, Any]:
+    """A run's run.json, checked for what reports need; InputError naming the file otherwise."""
+    path = Path(run_dir) / RUN_NAME
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        raise InputError(f"run '{run_dir}': no run.json (not a suctionbench eval run)") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"run file '{path}': unreadable ({exc})") from None
+    try:
+        run = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"run file '{path}': malformed JSON (line {exc.lineno}: {exc.msg}; truncated?)") from None
+    task = run.get("task") if isinstance(run, dict) else None
+    problem = (
+        "not a JSON object" if not isinstance(run, dict)
+        else "'task' is not an object with a name and a set" if not (
+            isinstance(task, dict) and isinstance(task.get("name"), str) and isinstance(task.get("set"), str))
+        else "'policy' is not a name" if not isinstance(run.get("policy"), str)
+        else "'trials' is not a positive count" if isinstance(run.get("trials"), bool)
+        or not isinstance(run.get("trials"), int) or run["trials"] < 1
+        else None
+    )
+    if problem:
+        raise InputError(f"run file '{path}': {problem} (not a suctionbench run.json)")
+    return run
+
+
+def run_status(run_dir: Path, run: dict[str, Any] | None = None) -> dict[str, Any]:
+    """How complete a run directory is: its expected trials (run.json) against the trial logs found,
+    unfinished logs (``.part``, left by a killed writer) and logs that are not among its trials."""
+    run_dir = Path(run_dir)
+    run = run if run is not None else read_run_json(run_dir)
+    found, unfinished = set(), []
+    log_dir = run_dir / TRIAL_DIR
+    if log_dir.is_dir():
+        for path in log_dir.iterdir():
+            m = _TRIAL_RE.match(path.name)
+            if m and path.is_file():
+                found.add(int(m.group(1)))
+            elif path.name.endswith(".part"):
+                unfinished.append(path.name)
+    expected = set(range(run["trials"]))
+    missing, extra = sorted(expected - found), sorted(found - expected)
+    return {"complete": not (missing or extra or unfinished),
+            "expected_trials": run["trials"], "found_trials": len(found & expected), "missing_trials": missing,
+            "extra_trials": extra, "unfinished_logs": sorted(unfinished)}
+
+
+def describe_status(run_dir: Path, status: dict[str, Any]) -> str:
+    """One line saying why a run is not complete."""
+    parts = [f"{status['found_trials']} of {status['expected_trials']} trial logs"]
+    if status["unfinished_logs"]:
+        parts.append(f"{len(status['unfinished_logs'])} unfinished (.part)")
+    if status["extra_trials"]:
+        parts.append(f"{len(status['extra_trials'])} not among its trials "
+                     f"({trial_log_name(status['extra_trials'][0])})")
+    hint = ("interrupted: finish it with eval --resume" if Path(run_dir).name.endswith(INCOMPLETE_SUFFIX)
+            or status["missing_trials"] or status["unfinished_logs"] else "stray trial logs")
+    return f"run '{run_dir}': incomplete: {', '.join(parts)} ({hint})"
+
+
+REPORT_SUFFIXES = (".html", ".md", ".png")
+"""What a report directory holds (all written by `suctionbench.evaluation.report.build_report`)."""
+
+
+def not_a_report(out: Path) -> str | None:
+    """Why an existing, non-empty `out` is not a report that a new one may replace (None: it is one)."""
+    entries = list(out.iterdir())
+    other = next((e for e in entries if not (e.is_file() and e.suffix in REPORT_SUFFIXES)), None)
+    if other is not None:
+        return f"holds '{other.name}', which report did not write"
+    if not any(e.name in ("index.html", "report.md") for e in entries):
+        return "holds files but no report (index.html)"
+    return None
+
+
+def _run_entries_ok(run_dir: Path) -> str | None:
+    """None if `run_dir` holds only what eval writes (run.json, trials/ logs) and reports built from it
+    (`report RUN --out RUN/report`), else the first other entry."""
+    for entry in sorted(run_dir.iterdir()):
+        if entry.name == RUN_NAME and entry.is_file():
+            continue
+        if entry.name != TRIAL_DIR and entry.is_dir() and not entry.is_symlink() and not_a_report(entry) is None:
+            continue
+        if entry.name == TRIAL_DIR and entry.is_dir() and not entry.is_symlink():
+            for log in sorted(entry.iterdir()):
+                if not (log.is_file() and (_TRIAL_RE.match(log.name) or log.name.endswith((".part", ".tmp")))):
+                    return str(log.relative_to(run_dir))
+            continue
+        return entry.name
+    return None
+
+
+def check_removable_run(run_dir: Path) -> None:
+    """InputError unless `run_dir` is an eval run that --overwrite may replace (nothing else in it)."""
+    read_run_json(run_dir)
+    other = _run_entries_ok(run_dir)
+    if other:
+        raise InputError(f"--overwrite '{run_dir}': holds '{other}', which eval did not write; nothing removed "
+                         "(choose another --out)")
+
+
+def remove_run(run_dir: Path) -> None:
+    """Delete an eval run directory after `check_removable_run` (never a directory with other files)."""
+    import shutil
+
+    check_removable_run(run_dir)
+    shutil.rmtree(run_dir)
+
+
+def _check_same_run(staging: Path, run: dict[str, Any]) -> None:
+    """InputError if the interrupted run in `staging` has another configuration than `run`."""
+    old = read_run_json(staging)
+    new = json.loads(json.dumps(json_safe(run)))
+    changed = sorted(k for k in set(old) | set(new) if k not in _IDENTITY_SKIP and old.get(k) != new.get(k))
+    if changed:
+        raise InputError(f"--resume: the interrupted run in '{staging}' has another configuration (differs in: "
+                         f"{', '.join(changed)}); pass --overwrite to start over")
 
 
 def _invocation() -> str | None:
@@ -174,11 +343,14 @@ def _check_model(model: str | None) -> None:
 
 
 def run_records(run_dir: Path) -> list[dict[str, Any]]:
-    """The result record of every trial log of a run, each with its log's path under "log"."""
-    from suctionbench.runlog.reader import read_run
+    """The result record of each of a run's trials whose log exists (only its own trials, by index),
+    each with its log's path under "log"."""
+    from suctionbench.runlog.reader import read_episode
 
-    return [episode["result"] | {"log": episode["path"]} for episode in read_run(Path(run_dir) / "trials")
-            if episode.get("result")]
+    run_dir = Path(run_dir)
+    logs = [run_dir / TRIAL_DIR / trial_log_name(i) for i in range(read_run_json(run_dir)["trials"])]
+    episodes = [read_episode(path) for path in logs if path.is_file()]
+    return [episode["result"] | {"log": episode["path"]} for episode in episodes if episode.get("result")]
 
 
 def summarize_run(run_dir: Path, records: list[dict[str, Any]] | None = None) -> dict[str, Any]:
@@ -186,15 +358,14 @@ def summarize_run(run_dir: Path, records: list[dict[str, Any]] | None = None) ->
     `run_records`, when the caller has read them already). "label" names the run in tables: the
     policy, with the metric for the analytic one."""
     run_dir = Path(run_dir)
-    try:
-        run = json.loads((run_dir / "run.json").read_text())
-    except FileNotFoundError:
-        raise InputError(f"run '{run_dir}': no run.json (not a suctionbench eval run)") from None
+    run = read_run_json(run_dir)
     if records is None:
         records = run_records(run_dir)
+    status = run_status(run_dir, run)
     label = f"{run['policy']}-{run.get('metric')}" if run["policy"] == "analytic" else run["policy"]
     return {"policy": run["policy"], "label": label, "task": run["task"]["name"], "set": run["task"]["set"],
-            "metric": run.get("metric"), **trial_metrics(records, modelled_compute(run))}
+            "metric": run.get("metric"), **trial_metrics(records, modelled_compute(run)),
+            "complete": status["complete"], "expected_trials": status["expected_trials"]}
 
 
 def score_stats(scores: np.ndarray, success: np.ndarray) -> dict[str, float | None]:

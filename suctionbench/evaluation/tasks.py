@@ -44,22 +44,47 @@ def tasks_dir() -> Path:
     return Path(str(resources.files("suctionbench.tasks")))
 
 
+FIELD_TYPES: dict[str, type] = {"name": str, "set": str, "trials": int, "placement": str, "seed": int,
+                                 "stable_poses": int, "metrics": list, "description": str}
+"""The TOML type of each task key (metrics: a list of metric names)."""
+
+
 def load_task(name: str) -> Task:
-    """A shipped task by name, or a task TOML file by path."""
+    """A shipped task by name, or a task TOML file by path; InputError naming the file and the key
+    for anything malformed: not UTF-8 TOML, unknown keys, wrong types, values out of range."""
+    from suctionbench.contact.metrics import METRICS
+    from suctionbench.sim.pick import PLACEMENTS
+    from suctionbench.validate import COUNT_MAX, OPTION_RULES
+
     path = Path(name) if name.endswith(".toml") else tasks_dir() / f"{name}.toml"
     if not path.is_file():
         known = ", ".join(sorted(p.stem for p in tasks_dir().glob("*.toml")))
         raise InputError(f"task '{name}' is unknown (known: {known})")
     try:
         data = tomllib.loads(path.read_text())
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"task '{path}': unreadable ({type(exc).__name__}: not a UTF-8 TOML file?)") from None
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"task '{path}': malformed TOML ({exc})") from None
     data.setdefault("name", path.stem)
+    unknown = sorted(set(data) - set(FIELD_TYPES))
+    if unknown:
+        raise InputError(f"task '{path}': unknown key(s) {', '.join(unknown)} (known: {', '.join(FIELD_TYPES)})")
+    for key, kind in FIELD_TYPES.items():
+        if key in data and (not isinstance(data[key], kind) or isinstance(data[key], bool)):
+            raise InputError(f"task '{path}': {key} = {data[key]!r} must be a {kind.__name__}")
+    if "set" not in data:
+        raise InputError(f"task '{path}': no 'set' (the object set the trials draw from)")
+    if "trials" not in data:
+        raise InputError(f"task '{path}': no 'trials' (how many)")
+    bad = [m for m in data.get("metrics", []) if m not in METRICS]
+    if bad:
+        raise InputError(f"task '{path}': metrics {bad} unknown (known: {', '.join(METRICS)})")
     data["metrics"] = tuple(data.get("metrics", ()))
-    try:
-        task = Task(**data)
-    except TypeError as exc:
-        raise InputError(f"task '{path}': {exc}") from None
-    if task.trials < 1:
-        raise InputError(f"task '{path}': trials must be at least 1")
-    return task
+    if data.get("placement", "drop") not in PLACEMENTS:
+        raise InputError(f"task '{path}': placement '{data['placement']}' must be one of {', '.join(PLACEMENTS)}")
+    OPTION_RULES["seed"].check(data.get("seed", 0), f"task '{path}': seed")
+    for key in ("trials", "stable_poses"):
+        if key in data and not 1 <= data[key] <= COUNT_MAX:
+            raise InputError(f"task '{path}': {key} = {data[key]} must be in [1, {COUNT_MAX}]")
+    return Task(**data)

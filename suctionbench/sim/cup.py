@@ -1,17 +1,41 @@
-"""The simulated suction cup (DESIGN.md, "Simulated suction cup"): physics, not magic.
+"""The simulated suction cup (docs/physics.md, "Simulated cup"): physics, not magic.
 
-A compliant bellow on passive joints (an axial slide and two tilt hinges, each a damped spring)
-carries a lip ring of n small spheres at the cup radius. Vacuum is a MuJoCo `adhesion` actuator
-on the lip body, with gain = the cup's vacuum force (pressure x area), switched on only while the
-seal test passes: every lip sphere touches (within `seal_gap`) one and the same object body. When
-a lip sphere lifts off, air leaks in and the vacuum, and with it the force, is gone.
+A bellows on passive joints (an axial slide and two tilt hinges about the lip centre, damped
+springs with the rates of `CupConfig`) carries a lip of n >= 16 points, each a small sphere on its
+own sprung axial slide that folds back by at most `CupConfig.lip_travel`: the lip conforms to a
+curved surface as a silicone lip does, and where the surface falls away by more than it can fold,
+a gap stays open.
 
-The geometric cup (n, radius, height, vacuum force, friction) is the labeller's `CupConfig`; the
-mechanical parameters only the simulation needs are in `SimCupConfig`. Neither is tuned to agree
-with the analytic labeller: they are set from physical estimates, documented per field.
+Vacuum. `SuctionController` runs a leak test while the vacuum is commanded and lip points touch an
+object: it measures the gap between the lip's edge and that object's surface at `leak_samples`
+places round the lip circle (`mujoco.mj_multiRay`, one call, against the object's surface mesh),
+from the distance at which a pressed lip rests (the contact margin), and integrates the leak area
+A = sum max(gap - seal_gap, 0) x arc. The ejector holds the vacuum p(A) where its flow curve meets
+the leak's orifice flow (`suctionbench.vacuum.equilibrium_vacuum`); the cup's pressure follows p(A)
+with a first-order time constant (the cup and hose volume evacuated by the ejector's flow), as
+MuJoCo actuator state. The pressure pulls the object toward the cup's body with V x p / p_max
+(V = p_max x effective area) and the body toward the object, squeezing the lip between them: a
+MuJoCo `adhesion` actuator (gain V, ctrl = p / p_max) on a probe sphere on the cup's axis whose
+only contacts are inactive ones with objects. The lip's contacts carry the rest: a torque about
+the lip is resisted only until one side's contact force reaches zero and the lip opens there (the
+ring-pressure peel limit r (V - m g) / 2 emerges from the contact forces; it is not coded). The
+seal breaks when the cup's vacuum falls below the ejector's part-present switch
+(`CupConfig.vacuum_switch_fraction`, i.e. a leak beyond `CupConfig.leak_threshold_area`): no
+hysteresis, no gap allowance beyond `seal_gap`.
+
+The physical cup (radius, effective area, vacuum, ejector, stiffnesses, stroke, lip travel, seal gap,
+friction) is `CupConfig`, shared with the analytic labeller; `SimCupConfig` holds only what the
+simulation adds (masses and MuJoCo solver settings chosen for stability at the 2 ms step, damping,
+the leak test's sampling). Nothing here is tuned to agree with the labeller.
+
+`SimCupConfig.rigid()` is the cup this module replaced (8 spheres on a rigid ring, sealed while all
+touch one body within 1 mm and held within 2 mm): kept only as the speed reference of
+`suctionbench bench episode`.
 
 Collision bitmasks used by the scene (contype / conaffinity):
-    environment (table, bin) 1 / 7, objects 1 / 7, robot links 2 / 1, cup lip and shell 4 / 1.
+    environment (table, bin) 1 / 7, objects 1 / 7 + 8 (`expose_to_vacuum`), robot links 2 / 1,
+    cup lip and shell 4 / 1, the cup's vacuum probe 8 / 0.
+Geom groups: objects' surface meshes (what the leak test measures) are group 2, collision parts 3.
 """
 
 from __future__ import annotations
@@ -23,102 +47,174 @@ import mujoco
 import numpy as np
 
 from suctionbench.config import CupConfig
+from suctionbench.vacuum import equilibrium_vacuum
 
 ENV_CONTYPE, ENV_CONAFFINITY = 1, 7
 CUP_CONTYPE, CUP_CONAFFINITY = 4, 1
+VACUUM_CONTYPE = 8
+"""Collision bit of the cup's vacuum probe; objects accept it (`expose_to_vacuum`), the environment,
+the robot and the cup do not."""
+_COS_WALL = math.cos(math.radians(45.0))
+"""Surfaces steeper than 45 deg to the lip plane are walls, not where a lip rests (`lip_gaps`)."""
+SURFACE_GROUP = 2
+"""Geom group of the objects' surface meshes (suctionbench.objects.mjcf): the leak test's target."""
 
 
 @dataclass(frozen=True)
 class SimCupConfig:
-    """Mechanical properties of the simulated bellow and lip (SI units)."""
+    """What the simulation adds to the physical cup (`CupConfig`): masses, damping, MuJoCo solver
+    settings and the leak test's sampling (SI units)."""
+
+    compliant: bool = True
+    """The compliant, leak-aware cup. False: the rigid reference cup (see `rigid()`)."""
+
+    lip_points: int = 16
+    """Lip points, each on its own sprung axial slide (>= 16: 2.9 mm apart on the 47 mm lip, so the
+    1.5 mm spheres form a nearly closed rim)."""
+
+    leak_samples: int = 48
+    """Places round the lip circle where the leak test measures the gap (0.98 mm apart on the 15 mm
+    cup: a 2 mm groove crossing the lip covers at least two)."""
 
     tool_length: float = 0.10
     """Distance from the robot flange to the lip plane along the tool axis (shaft + cup)."""
 
     shaft_radius: float = 0.008
-    """Radius of the rigid tool shaft between flange and bellow."""
+    """Radius of the rigid tool shaft between flange and bellows."""
 
-    lip_sphere_radius: float = 0.0015
-    """Radius of each lip sphere (the lip's rounded edge)."""
-
-    axial_stiffness: float = 1500.0
-    """Bellow spring rate along the axis (N/m): a 15 mm single bellow compresses ~5 mm under
-    ~7 N of contact force."""
+    lip_sphere_radius: float = 0.001
+    """Radius of each lip sphere (the lip's rounded edge). Small, because a sphere resting on a
+    slope touches it inside the lip circle (by rho sin(slope): 0.6 mm on a 38 deg slope), which
+    shortens the lip's effective radius on curved surfaces; 1 mm spheres 2.9 mm apart still form
+    a rim that nothing the objects have reaches between."""
 
     axial_damping: float = 30.0
-    """Axial damping (N s/m): about 1.5 x critical for the lip plus a light object (lossy
-    silicone). Less lets a light object chatter against the lip under the 9 N vacuum pull."""
-
-    tilt_stiffness: float = 0.05
-    """Bellow bending stiffness about either tilt axis (N m/rad)."""
+    """Bellows axial damping (N s/m): about 1.5 x critical for the lip plus a light object (lossy
+    silicone). Less lets a light object chatter against the lip under the vacuum pull."""
 
     tilt_damping: float = 0.01
-    """Tilt damping (N m s/rad): silicone bellows are lossy."""
+    """Bellows tilt damping (N m s/rad): silicone bellows are lossy."""
 
-    max_compression: float = 0.006
-    """Axial travel of the bellow (m), 40 % of the cup height."""
+    lip_damping_ratio: float = 1.0
+    """Damping of each lip point's fold, as a fraction of critical (lossy silicone: no ringing)."""
 
-    max_tilt: float = 0.5
-    """Tilt range of the bellow (rad) on either side."""
+    lip_mass: float = 0.004
+    """Mass of the whole lip (kg), shared by its points: a few grams of silicone."""
 
-    lip_mass: float = 0.02
-    """Mass of the lip ring (kg), with its fitting. MuJoCo's contact stiffness scales with the
-    effective mass, so a few grams would let the 9 N vacuum pull the lip millimetres into the
-    object; 20 g with `contact_solref` keeps penetration under ~0.5 mm."""
+    lip_armature: float = 0.01
+    """Armature (kg) of each lip point's slide: inertia along the fold only, no weight. MuJoCo's
+    contact stiffness scales with the contact's effective mass; at a fraction of a gram per point
+    the vacuum's pull would press a point a millimetre into the object. With 10 g the pressed lip
+    rests within ~0.1 mm of its margin (see `contact_margin`), and a point still folds through its
+    travel in ~15 ms."""
+
+    bellow_mass: float = 0.006
+    """Mass of the bellows (kg)."""
 
     contact_solref: tuple[float, float] = (0.004, 1.0)
-    """MuJoCo solref of lip contacts (time constant = 2 timesteps, critically damped): as stiff as
-    the 2 ms step allows, because the lip is hard rubber on a rigid object."""
+    """MuJoCo solref of lip contacts and of the bellows' and lip's travel limits (time constant = 2
+    timesteps, critically damped): as stiff as the 2 ms step allows."""
 
     contact_solimp: tuple[float, float, float] = (0.95, 0.99, 0.0005)
     """MuJoCo solimp of lip contacts (impedance rising to 0.99 within 0.5 mm)."""
 
     contact_margin: float = 0.0005
-    """MuJoCo margin of the lip spheres (m): the contact constraint engages 0.5 mm before touch,
-    which damps the object's approach when the vacuum pulls it in (a held object hangs ~0.5 mm
-    below the lip, a visual artefact)."""
+    """MuJoCo margin of the lip spheres (m): a pressed lip point rests this far from the object's
+    collision surface. The leak test measures gaps from this resting distance."""
 
-    bellow_mass: float = 0.006
-    """Mass of the bellow (kg)."""
-
-    seal_gap: float = 0.001
-    """A seal forms when every lip sphere is within this distance (m) of one object's surface."""
-
-    release_gap: float = 0.002
-    """An existing seal holds while every lip sphere stays within this distance: the lip is
-    flexible and a sub-millimetre gap leaks little. Also the MuJoCo contact gap, so such
-    near-contacts exist (inactive for the solver) and the adhesion acts through them."""
+    contact_gap: float = 0.001
+    """MuJoCo gap of the lip spheres (m): contacts exist (inactive for the solver) up to this far
+    beyond the margin, so a lip point lifted by less still carries its share of the vacuum's pull
+    (the pressure acts on the object as long as it lasts; the leak test decides how long)."""
 
     vacuum_time_constant: float = 0.03
-    """First-order time constant (s) of the vacuum force: a small cup evacuates, and vents after a
-    leak, in tens of milliseconds, so a momentary lift-off does not drop the force at once."""
+    """First-order time constant (s) of the cup's vacuum: the cup (~2.7 cm^3) and its hose
+    (~4 cm^3) evacuated by the 16 l/min ejector, V / Q = 6.7 cm^3 / 267 cm^3/s = 25 ms."""
+
+    leak_test_interval: float = 0.008
+    """Time (s) between leak tests: about a quarter of the vacuum time constant, so the pressure
+    reacts to a new leak within a fraction of the time it takes to vent."""
+
+    ray_apex_height: float = 0.05
+    """The leak test casts its rays from one point on the cup axis this far behind the lip plane
+    (inside the shaft) through each lip place: 8.5 deg off axial on the 15 mm cup."""
+
+    probe_radius: float = 0.001
+    """Radius (m) of the vacuum probe sphere on the cup axis."""
+
+    probe_clearance: float = 0.001
+    """Distance (m) of the probe's surface behind the deepest the lip can fold to (lip_travel behind
+    the lip plane), so a surface the lip rests on never touches it."""
 
     shell_height_fraction: float = 0.5
-    """The bellow's solid shell starts this fraction of the cup height above the lip plane: anything
-    reaching higher inside the ring hits the cup (the labeller's cone collision, physically)."""
+    """The bellows' solid shell (radius 0.8 r) reaches down to this fraction of the cup height above
+    the lip plane: anything reaching higher inside the ring hits the cup."""
+
+    rigid_seal_gap: float = 0.001
+    """Rigid reference only: a seal forms when every lip sphere is within this distance (m)."""
+
+    rigid_release_gap: float = 0.002
+    """Rigid reference only: a seal holds while every lip sphere stays within this distance (m)."""
+
+    rigid_lip_mass: float = 0.02
+    """Rigid reference only: mass of its rigid lip ring (kg)."""
+
+    rigid_sphere_radius: float = 0.0015
+    """Rigid reference only: radius of its lip spheres (m)."""
+
+    def __post_init__(self) -> None:
+        if self.compliant and self.lip_points < 16:
+            raise ValueError(f"sim cup: lip_points = {self.lip_points} must be >= 16 for the compliant cup")
+        if self.leak_samples < 32:
+            raise ValueError(f"sim cup: leak_samples = {self.leak_samples} must be >= 32")
+
+    @classmethod
+    def rigid(cls) -> SimCupConfig:
+        """The rigid reference cup: 8 spheres on one rigid ring, no leak test (speed reference)."""
+        return cls(compliant=False, lip_points=8)
+
+    def lip_point_stiffness(self, cup: CupConfig) -> float:
+        """Fold stiffness (N/m) of one lip point. The lip is a thin flap that the vacuum's pressure
+        on its own annulus, p_max x pi (r^2 - r_i^2), folds through its whole travel: the ring's
+        rate is that force over lip_travel (2450 N/m for the default cup), shared by the points."""
+        ring = cup.vacuum_pressure * math.pi * (cup.radius**2 - cup.inner_radius**2) / cup.lip_travel
+        return ring / self.lip_points
+
+
+SIM_CUP_DEFAULT = SimCupConfig()
+"""The compliant, leak-aware cup of the benchmark."""
 
 
 @dataclass(frozen=True)
 class CupHandles:
-    """Names of the cup's MuJoCo elements."""
+    """Names of the cup's MuJoCo elements and the configurations they were built from."""
 
     tip_site: str
-    actuator: str
+    actuators: tuple[str, ...]
     slide_joint: str
     lip_geoms: tuple[str, ...]
+    lip_joints: tuple[str, ...]
+    bellow_body: str
+    cup: CupConfig
+    sim: SimCupConfig
+
+    @property
+    def actuator(self) -> str:
+        """The first vacuum actuator (all carry the same pressure)."""
+        return self.actuators[0]
 
 
 def add_suction_tool(
     parent: mujoco.MjsBody,
     spec: mujoco.MjSpec,
     cup: CupConfig,
-    sim: SimCupConfig = SimCupConfig(),
+    sim: SimCupConfig = SIM_CUP_DEFAULT,
     *,
     prefix: str = "cup",
     pos=(0.0, 0.0, 0.0),
     quat=(1.0, 0.0, 0.0, 0.0),
 ) -> CupHandles:
-    """Attach shaft, bellow, lip ring, tip site and vacuum actuator to `parent`.
+    """Attach shaft, bellows, lip, tip site and vacuum actuators to `parent`.
 
     The tool axis is the parent frame's +z at `pos`/`quat`: the approach direction v. The tip site
     sits at the lip plane's centre, the point that is brought onto the grasp target.
@@ -131,99 +227,262 @@ def add_suction_tool(
         rgba=[0.3, 0.3, 0.35, 1],
     )
     bellow = tool.add_body(name=f"{prefix}_bellow", pos=[0, 0, shaft_len])
+    # Bellows: the axial spring over the stroke, and the tilt about the lip centre. One side of the
+    # wall can compress by at most the stroke while the other is uncompressed: the lip plane tilts
+    # by at most atan(stroke / 2r) (21.8 deg for the default cup).
+    max_tilt = math.atan2(cup.stroke, 2.0 * cup.radius)
     bellow.add_joint(
         name=f"{prefix}_compress", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1],
-        stiffness=sim.axial_stiffness, damping=sim.axial_damping, range=[-sim.max_compression, 0.0],
+        stiffness=cup.axial_stiffness, damping=sim.axial_damping, range=[-cup.stroke, 0.0],
         limited=True, armature=1e-4, solref_limit=list(sim.contact_solref),
     )
     for axis, label in (([1, 0, 0], "tilt_x"), ([0, 1, 0], "tilt_y")):
         bellow.add_joint(
             name=f"{prefix}_{label}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=axis, pos=[0, 0, cup.height],
-            stiffness=sim.tilt_stiffness, damping=sim.tilt_damping, range=[-sim.max_tilt, sim.max_tilt],
+            stiffness=cup.bending_stiffness, damping=sim.tilt_damping, range=[-max_tilt, max_tilt],
             limited=True, armature=1e-6, solref_limit=list(sim.contact_solref),
         )
-    shell_start = sim.shell_height_fraction * cup.height
-    shell_len = cup.height - shell_start
+    shell_len = (1.0 - sim.shell_height_fraction) * cup.height
     bellow.add_geom(
         name=f"{prefix}_shell", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-        size=[0.8 * cup.radius, shell_len / 2, 0], pos=[0, 0, shell_start + shell_len / 2],
+        size=[0.8 * cup.radius, shell_len / 2, 0], pos=[0, 0, shell_len / 2],
         contype=CUP_CONTYPE, conaffinity=CUP_CONAFFINITY, mass=sim.bellow_mass, group=3,
         rgba=[0.2, 0.4, 0.8, 0.6],
     )
-    # The lip: ring of spheres whose outer surfaces touch the lip plane at z = tool_length.
-    lip = bellow.add_body(name=f"{prefix}_lip", pos=[0, 0, cup.height - sim.lip_sphere_radius])
-    lip_mass = sim.lip_mass / cup.n_vertices
-    names = []
-    for i in range(cup.n_vertices):
-        angle = 2.0 * math.pi * i / cup.n_vertices
-        name = f"{prefix}_lip_{i}"
-        lip.add_geom(
-            name=name, type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[sim.lip_sphere_radius, 0, 0],
-            pos=[cup.radius * math.cos(angle), cup.radius * math.sin(angle), 0.0],
-            contype=CUP_CONTYPE, conaffinity=CUP_CONAFFINITY, condim=6, mass=lip_mass,
-            friction=[cup.friction, 0.005, 0.0001], margin=sim.contact_margin, gap=sim.release_gap, group=3,
-            rgba=[0.1, 0.1, 0.1, 1], priority=1, solref=list(sim.contact_solref),
-            solimp=list(sim.contact_solimp) + [0.5, 2.0],
+    bellow.add_site(name=f"{prefix}_tip", pos=[0, 0, cup.height], size=[0.002, 0, 0])
+    lip_geom = {
+        "type": mujoco.mjtGeom.mjGEOM_SPHERE, "size": [sim.lip_sphere_radius, 0, 0],
+        "contype": CUP_CONTYPE, "conaffinity": CUP_CONAFFINITY, "margin": sim.contact_margin, "group": 3,
+        "rgba": [0.1, 0.1, 0.1, 1], "priority": 1, "solref": list(sim.contact_solref),
+        "solimp": list(sim.contact_solimp) + [0.5, 2.0],
+    }
+    vacuum = {
+        "trntype": mujoco.mjtTrn.mjTRN_BODY, "gaintype": mujoco.mjtGain.mjGAIN_FIXED,
+        "biastype": mujoco.mjtBias.mjBIAS_NONE, "ctrlrange": [0, 1], "ctrllimited": True,
+        "dyntype": mujoco.mjtDyn.mjDYN_FILTEREXACT, "dynprm": [sim.vacuum_time_constant] + [0] * 9,
+    }
+    n = sim.lip_points
+    if not sim.compliant:  # the rigid reference: one ring body, one actuator, the old 1 / 2 mm gaps
+        rho = sim.rigid_sphere_radius
+        lip = bellow.add_body(name=f"{prefix}_lip", pos=[0, 0, cup.height - rho])
+        names = []
+        for i in range(n):
+            angle = 2.0 * math.pi * i / n
+            names.append(f"{prefix}_lip_{i}")
+            lip.add_geom(
+                name=names[-1], pos=[cup.radius * math.cos(angle), cup.radius * math.sin(angle), 0.0],
+                condim=6, mass=sim.rigid_lip_mass / n, friction=[cup.friction, 0.005, 0.0001],
+                **{**lip_geom, "size": [rho, 0, 0]}, gap=sim.rigid_release_gap,
+            )
+        spec.add_actuator(name=f"{prefix}_vacuum", target=f"{prefix}_lip", gainprm=[cup.vacuum_force] + [0] * 9,
+                          **vacuum)
+        return CupHandles(
+            tip_site=f"{prefix}_tip", actuators=(f"{prefix}_vacuum",), slide_joint=f"{prefix}_compress",
+            lip_geoms=tuple(names), lip_joints=(), bellow_body=f"{prefix}_bellow", cup=cup, sim=sim,
         )
-        names.append(name)
-    lip.add_site(name=f"{prefix}_tip", pos=[0, 0, sim.lip_sphere_radius], size=[0.002, 0, 0])
-    spec.add_actuator(
-        name=f"{prefix}_vacuum", trntype=mujoco.mjtTrn.mjTRN_BODY, target=f"{prefix}_lip",
-        gaintype=mujoco.mjtGain.mjGAIN_FIXED, gainprm=[cup.vacuum_force] + [0] * 9,
-        biastype=mujoco.mjtBias.mjBIAS_NONE, ctrlrange=[0, 1], ctrllimited=True,
-        dyntype=mujoco.mjtDyn.mjDYN_FILTEREXACT, dynprm=[sim.vacuum_time_constant] + [0] * 9,
+    # The compliant lip: n points, each on its own slide along the axis, folding back (q < 0) by up
+    # to lip_travel against its spring; unfolded (q = 0) the sphere's bottom is on the lip plane.
+    k = sim.lip_point_stiffness(cup)
+    point_mass = sim.lip_mass / n
+    damping = 2.0 * sim.lip_damping_ratio * math.sqrt(k * (point_mass + sim.lip_armature))
+    names, joints = [], []
+    for i in range(n):
+        angle = 2.0 * math.pi * i / n
+        body = bellow.add_body(
+            name=f"{prefix}_lip_point_{i}",
+            pos=[cup.radius * math.cos(angle), cup.radius * math.sin(angle), cup.height - sim.lip_sphere_radius],
+        )
+        joints.append(f"{prefix}_lip_fold_{i}")
+        body.add_joint(
+            name=joints[-1], type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1], stiffness=k, damping=damping,
+            range=[-cup.lip_travel, 0.0], limited=True, armature=sim.lip_armature,
+            solref_limit=list(sim.contact_solref), solimp_limit=list(sim.contact_solimp) + [0.5, 2.0],
+        )
+        # condim 3: a ring of point contacts resists torsion through tangential friction at the
+        # lever arm r, so per-point torsional friction (condim 6) would count it twice.
+        names.append(f"{prefix}_lip_{i}")
+        body.add_geom(name=names[-1], condim=3, mass=point_mass, friction=[cup.friction, 0.0, 0.0],
+                      gap=sim.contact_gap, **lip_geom)
+    # The vacuum: the pressure inside the lip pulls the object toward the cup's body (and the body
+    # toward the object), squeezing the lip between them. MuJoCo's adhesion acts along contact
+    # normals, so the cup's body carries a small probe sphere on the axis, behind where the lip can
+    # fold to, that touches nothing but objects (VACUUM_CONTYPE) and whose contacts with them are
+    # never active (margin 0, gap: the cup's height): through them the actuator applies V x p / p_max
+    # at the point of the object nearest the cup's axis.
+    setback = cup.lip_travel + sim.probe_clearance + sim.probe_radius
+    probe = bellow.add_body(name=f"{prefix}_vacuum", pos=[0, 0, cup.height - setback])
+    probe.add_geom(
+        name=f"{prefix}_vacuum_probe", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[sim.probe_radius, 0, 0],
+        contype=VACUUM_CONTYPE, conaffinity=0, margin=0.0, gap=cup.height, condim=1, mass=1e-4, group=4,
+        rgba=[0.9, 0.2, 0.2, 0.3],
     )
+    spec.add_actuator(name=f"{prefix}_vacuum", target=probe.name, gainprm=[cup.vacuum_force] + [0] * 9, **vacuum)
     return CupHandles(
-        tip_site=f"{prefix}_tip",
-        actuator=f"{prefix}_vacuum", slide_joint=f"{prefix}_compress", lip_geoms=tuple(names),
+        tip_site=f"{prefix}_tip", actuators=(f"{prefix}_vacuum",), slide_joint=f"{prefix}_compress",
+        lip_geoms=tuple(names), lip_joints=tuple(joints), bellow_body=f"{prefix}_bellow", cup=cup, sim=sim,
     )
+
+
+def expose_to_vacuum(body: mujoco.MjsBody) -> None:
+    """Let the cup's vacuum act on `body`: its colliding geoms accept the vacuum probe's contacts."""
+    for geom in body.geoms:
+        if geom.contype or geom.conaffinity:
+            geom.conaffinity = geom.conaffinity | VACUUM_CONTYPE
 
 
 class SuctionController:
-    """Reads the lip contacts each step and drives the vacuum: on only while sealed and commanded."""
+    """Drives the cup's vacuum each step from its seal state (the compliant cup's leak test, or the
+    rigid reference's contact gaps). `commanded`: the vacuum valve; `sealed`: the object body the
+    cup holds by vacuum (-1: none)."""
 
-    def __init__(self, model: mujoco.MjModel, handles: CupHandles, sim: SimCupConfig = SimCupConfig()):
+    def __init__(self, model: mujoco.MjModel, handles: CupHandles):
         self.model = model
-        self.sim = sim
+        self.handles = handles
+        self.cup, self.sim = handles.cup, handles.sim
         self.lip_geoms = np.array([model.geom(n).id for n in handles.lip_geoms])
         self._lip_slot = np.full(model.ngeom, -1)
         """Per geom: its index among the lip spheres, -1 for any other geom."""
         self._lip_slot[self.lip_geoms] = np.arange(len(self.lip_geoms))
-        self.actuator = model.actuator(handles.actuator).id
+        self.actuators = np.array([model.actuator(a).id for a in handles.actuators])
+        self.actuator = int(self.actuators[0])
+        self._act = int(model.actuator_actadr[self.actuator])
+        """Address of the first actuator's state: the cup's vacuum as a fraction of p_max."""
         self.slide_qpos = model.jnt_qposadr[model.joint(handles.slide_joint).id]
+        self.lip_qpos = np.array([model.jnt_qposadr[model.joint(j).id] for j in handles.lip_joints], dtype=int)
+        self.bellow = model.body(handles.bellow_body).id
         self.commanded = False
         self.sealed = -1
+        self.candidate = -1
+        """The object body the lip touches at the last leak test (-1: none)."""
+        self.leak_area = math.inf
+        """Leak area (m^2) at the last leak test (inf: no object under the lip)."""
+        self.leak_tests = 0
+        self._next_test = -math.inf
+        self._switch = self.cup.vacuum_switch_fraction
+        n, k = len(self.lip_geoms), self.sim.leak_samples
+        self._phi = 2.0 * math.pi * np.arange(k) / k
+        self._theta = 2.0 * math.pi * np.arange(n) / n if n else np.zeros(0)
+        self._ring = np.stack([self.cup.radius * np.cos(self._phi), self.cup.radius * np.sin(self._phi)], axis=1)
+        self._arc = 2.0 * math.pi * self.cup.radius / k
+        self._group = np.zeros(6, dtype=np.uint8)
+        self._group[SURFACE_GROUP] = 1
+        self._ray_geom = np.zeros(k, dtype=np.int32)
+        self._ray_dist = np.zeros(k)
+        self._ray_normal = np.zeros((k, 3))
 
-    def sealed_body(self, data: mujoco.MjData, gap: float | None = None) -> int:
-        """Id of the body that every lip sphere touches within `gap` (default seal_gap), else -1."""
-        gap = self.sim.seal_gap if gap is None else gap
+    # -- read-outs --------------------------------------------------------------------------------
+    def compression(self, data: mujoco.MjData) -> float:
+        """How far (m) the bellows is compressed."""
+        return -float(data.qpos[self.slide_qpos])
+
+    def vacuum(self, data: mujoco.MjData) -> float:
+        """The cup's vacuum as a fraction of the ejector's p_max (the actuators' filtered state)."""
+        return float(data.act[self._act])
+
+    def vacuum_on(self, data: mujoco.MjData) -> bool:
+        """Whether the vacuum pulls (valve open and the cup not vented)."""
+        return bool(self.commanded and data.ctrl[self.actuator] > 0.0)
+
+    def touching(self, data: mujoco.MjData, gap: float | None = None) -> np.ndarray:
+        """(n_lip, nbody) bool: which lip point has a contact within `gap` (default: any contact
+        MuJoCo reports, i.e. within margin + gap) with which body."""
         n = data.ncon
+        touching = np.zeros((len(self.lip_geoms), self.model.nbody), dtype=bool)
         if n == 0 or not len(self.lip_geoms):
-            return -1
-        geoms, near = data.contact.geom[:n], data.contact.dist[:n] <= gap
-        touching = np.zeros((len(self.lip_geoms), self.model.nbody), dtype=bool)  # lip sphere x body
+            return touching
+        geoms = data.contact.geom[:n]
+        near = np.ones(n, dtype=bool) if gap is None else data.contact.dist[:n] <= gap
         for mine, other in ((0, 1), (1, 0)):
             slot = self._lip_slot[geoms[:, mine]]
             hit = near & (slot >= 0)
             touching[slot[hit], self.model.geom_bodyid[geoms[hit, other]]] = True
+        return touching
+
+    # -- the seal ---------------------------------------------------------------------------------
+    def update(self, data: mujoco.MjData) -> int:
+        """Drive the vacuum for this step; returns the body sealed by vacuum (-1 if none)."""
+        if not self.sim.compliant:
+            return self._update_rigid(data)
+        if not self.commanded:
+            data.ctrl[self.actuators] = 0.0
+            self.sealed, self.candidate, self._next_test = -1, -1, -math.inf
+            return -1
+        if data.time >= self._next_test:
+            self._next_test = data.time + self.sim.leak_test_interval - 1e-9
+            self.leak_test(data)
+            target = 0.0 if self.candidate < 0 else float(equilibrium_vacuum(self.leak_area, self.cup))
+            data.ctrl[self.actuators] = target / self.cup.vacuum_pressure
+        sealed = self.candidate >= 0 and data.act[self._act] >= self._switch
+        self.sealed = self.candidate if sealed else -1
+        return self.sealed
+
+    def leak_test(self, data: mujoco.MjData) -> float:
+        """Measure the leak under the lip: sets `candidate` (the object body most lip points touch)
+        and `leak_area` (m^2); returns the leak area (inf when no object is under the lip)."""
+        self.leak_tests += 1
+        touching = self.touching(data)
+        touching[:, 0] = False  # the world body (table, bin walls): not an object we can lift
+        counts = touching.sum(axis=0)
+        if not counts.any():
+            self.candidate, self.leak_area = -1, math.inf
+            return self.leak_area
+        self.candidate = int(np.argmax(counts))
+        self.leak_area = float(self._leak_area(data, self.candidate))
+        return self.leak_area
+
+    def lip_gaps(self, data: mujoco.MjData, body: int) -> np.ndarray:
+        """Gap (m) between the lip's edge and `body`'s surface at the leak test's places round the lip
+        circle, measured along the cup axis from where a pressed lip rests; `cup.radius` where the
+        surface is missing (over an edge, another body in the way).
+
+        Where the lip rests: a lip sphere (radius rho) pressed on a surface sloping by alpha to the
+        lip plane sits with its centre rho + margin from the surface, so its lowest point is
+        (rho + margin) / cos(alpha) - rho above the surface along the axis (margin on a parallel
+        face). That is the rounded sphere's geometry, not a gap of the thin lip it stands for.
+        Slopes beyond 45 deg are walls (a groove's side, an object's side face), not surfaces a lip
+        rests on: the correction stops growing there."""
+        cup, sim = self.cup, self.sim
+        rot = data.xmat[self.bellow].reshape(3, 3)
+        origin = data.xpos[self.bellow]
+        # The lip's edge between its points: the points' folds interpolated round the circle.
+        fold = np.interp(self._phi, self._theta, data.qpos[self.lip_qpos], period=2.0 * math.pi)
+        local = np.column_stack([self._ring, cup.height + fold])
+        places = origin + local @ rot.T
+        axis = rot[:, 2]
+        apex = origin + (cup.height - sim.ray_apex_height) * axis
+        rays = places - apex
+        length = np.linalg.norm(rays, axis=1)
+        rays /= length[:, None]
+        cutoff = float(length.max() + cup.radius)
+        mujoco.mj_multiRay(self.model, data, apex, rays.ravel(), self._group, 0, -1, self._ray_geom,
+                           self._ray_dist, self._ray_normal.ravel(), len(rays), cutoff)
+        hit = (self._ray_geom >= 0) & (self.model.geom_bodyid[np.maximum(self._ray_geom, 0)] == body)
+        beyond = (self._ray_dist - length) * (rays @ axis)  # axial distance from the lip's edge
+        cos_slope = np.maximum(np.abs(self._ray_normal @ axis), _COS_WALL)
+        rest = (sim.lip_sphere_radius + sim.contact_margin) / cos_slope - sim.lip_sphere_radius
+        gaps = np.where(hit, beyond - rest, cup.radius)
+        return np.clip(gaps, 0.0, cup.radius)
+
+    def _leak_area(self, data: mujoco.MjData, body: int) -> float:
+        gaps = self.lip_gaps(data, body)
+        return float(np.sum(np.maximum(gaps - self.cup.seal_gap, 0.0)) * self._arc)
+
+    # -- the rigid reference ------------------------------------------------------------------------
+    def sealed_body(self, data: mujoco.MjData, gap: float | None = None) -> int:
+        """Rigid reference: the body that every lip sphere touches within `gap` (default its seal
+        gap), else -1."""
+        touching = self.touching(data, self.sim.rigid_seal_gap if gap is None else gap)
         common = touching.all(axis=0)
-        common[0] = False  # the world body (table, bin walls): not an object we can lift
+        common[0] = False
         return int(np.argmax(common)) if common.any() else -1
 
-    def compression(self, data: mujoco.MjData) -> float:
-        """How far (m) the bellow is compressed."""
-        return -float(data.qpos[self.slide_qpos])
-
-    def update(self, data: mujoco.MjData) -> int:
-        """Gate the vacuum for this step; returns the sealed body id (-1 if none).
-
-        A seal forms within seal_gap and, while the vacuum is commanded, holds on the same body
-        within release_gap (hysteresis); once lost, the vacuum vents.
-        """
-        if self.commanded and self.sealed >= 0 and self.sealed_body(data, self.sim.release_gap) == self.sealed:
+    def _update_rigid(self, data: mujoco.MjData) -> int:
+        """Rigid reference: a seal forms within rigid_seal_gap and, while the vacuum is commanded,
+        holds on the same body within rigid_release_gap (hysteresis); once lost, the vacuum vents."""
+        if self.commanded and self.sealed >= 0 and self.sealed_body(data, self.sim.rigid_release_gap) == self.sealed:
             body = self.sealed
         else:
             body = self.sealed_body(data)
         self.sealed = body if self.commanded else -1
-        data.ctrl[self.actuator] = 1.0 if (self.commanded and body >= 0) else 0.0
+        data.ctrl[self.actuators] = 1.0 if (self.commanded and body >= 0) else 0.0
         return body

@@ -13,7 +13,14 @@ from suctionbench.config import CupConfig
 from suctionbench.objects.build import ObjectRecord
 from suctionbench.objects.mjcf import add_object_body
 from suctionbench.sensing.camera import CameraIntrinsics, add_camera
-from suctionbench.sim.cup import ENV_CONAFFINITY, ENV_CONTYPE, CupHandles, SimCupConfig, add_suction_tool
+from suctionbench.sim.cup import (
+    ENV_CONAFFINITY,
+    ENV_CONTYPE,
+    CupHandles,
+    SimCupConfig,
+    add_suction_tool,
+    expose_to_vacuum,
+)
 from suctionbench.sim.yumi import RIGHT_FLANGE_SITE, load_yumi_spec
 
 FLANGE_BODY = "yumi_link_7_r"
@@ -99,7 +106,9 @@ def build_scene(
         pos=[config.table_centre_x, 0.0, -tz / 2], rgba=[0.55, 0.45, 0.35, 1], **env,
     )
     _add_bin(world, config, env)
-    add_object_body(spec, record, name="object", pos=(config.workspace_centre[0], config.workspace_centre[1], 0.3))
+    cx, cy = config.workspace_centre
+    body = add_object_body(spec, record, name="object", pos=(cx, cy, 0.3))
+    expose_to_vacuum(body)
     flange = spec.site(RIGHT_FLANGE_SITE)
     handles = add_suction_tool(
         spec.body(FLANGE_BODY), spec, cup, sim_cup, prefix="cup", pos=list(flange.pos), quat=list(flange.quat)

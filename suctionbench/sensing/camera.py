@@ -39,6 +39,16 @@ if TYPE_CHECKING:
 # --------------------------------------------------------------------------------------------------
 
 
+IMAGE_PIXELS = (32, 4096)
+"""Valid image width and height (px): at least one 32 px grasp thumbnail, at most an offscreen buffer."""
+
+FOV_DEG = (1.0, 170.0)
+"""Valid field of view (deg) of a pinhole depth camera, from its focal length and image size."""
+
+MAX_DEPTH_M = 10.0
+"""Largest working range (m) the scene renders (MuJoCo's far clip plane is ~10.6 m)."""
+
+
 @dataclass(frozen=True)
 class CameraIntrinsics:
     """A distortion-free pinhole depth camera (rendered images have no lens distortion, so none is
@@ -102,6 +112,17 @@ class CameraIntrinsics:
             raise InputError(f"{label}: min_depth = {self.min_depth} must be positive")
         if self.min_depth >= self.max_depth:
             raise InputError(f"{label}: min_depth = {self.min_depth} must be below max_depth = {self.max_depth}")
+        for key in ("width", "height"):  # what the renderer and a 32 x 32 px grasp thumbnail can use
+            if not IMAGE_PIXELS[0] <= getattr(self, key) <= IMAGE_PIXELS[1]:
+                raise InputError(f"{label}: {key} = {getattr(self, key)} px outside {list(IMAGE_PIXELS)}")
+        for key, size, focal in (("horizontal", self.width, self.fx), ("vertical", self.height, self.fy)):
+            fov = math.degrees(2 * math.atan(size / (2 * focal)))
+            if not FOV_DEG[0] <= fov <= FOV_DEG[1]:
+                raise InputError(f"{label}: {key} field of view {fov:.3g} deg (from the focal length) outside "
+                                 f"{list(FOV_DEG)} deg")
+        if self.max_depth > MAX_DEPTH_M:
+            raise InputError(f"{label}: max_depth = {self.max_depth} m beyond {MAX_DEPTH_M} m (the scene's far "
+                             "clip plane; depth cameras for picking see a few metres)")
 
     @property
     def matrix(self) -> np.ndarray:

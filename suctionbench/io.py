@@ -4,6 +4,7 @@ none in place of the output (files: temp file + rename; directories: temp siblin
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import math
 import os
@@ -30,14 +31,39 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     os.close(fd)
     tmp_path = Path(tmp)
     try:
-        yield tmp_path
+        try:
+            yield tmp_path
+        except OSError as exc:
+            if exc.errno not in WRITE_ERRNOS:
+                raise
+            raise InputError(f"output '{path}': cannot write there ({os_error_reason(exc)})") from None
         try:
             os.chmod(tmp_path, 0o666 & ~_umask())  # mkstemp makes 0600 files; use the usual mode
             os.replace(tmp_path, path)
         except OSError as exc:
-            raise InputError(f"output '{path}': cannot write there ({exc.strerror})") from None
+            raise InputError(f"output '{path}': cannot write there ({os_error_reason(exc)})") from None
     finally:
         tmp_path.unlink(missing_ok=True)
+
+
+WRITE_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EPERM, errno.EFBIG})
+"""Errors of the place being written to (full, read-only, not permitted), not of the program."""
+
+_HINTS = {
+    errno.ENOSPC: "disk full: free space or write elsewhere",
+    errno.EDQUOT: "disk quota exceeded: free space or write elsewhere",
+    errno.EROFS: "read-only file system: write elsewhere",
+    errno.EACCES: "no permission: write elsewhere or fix the permissions",
+    errno.EPERM: "not permitted: write elsewhere or fix the permissions",
+    errno.ENOTDIR: "a file stands where a directory must be",
+}
+
+
+def os_error_reason(exc: OSError) -> str:
+    """The reason of a file-system error with what to do about it ('No space left on device (disk full: ...)')."""
+    reason = exc.strerror or type(exc).__name__
+    hint = _HINTS.get(exc.errno or 0)
+    return f"{reason} ({hint})" if hint else reason
 
 
 def _umask() -> int:

@@ -122,8 +122,11 @@ def require_disk(path: str | Path, nbytes: float, what: str) -> None:
     while not probe.exists() and probe != probe.parent:
         probe = probe.parent
     try:
-        free = shutil.disk_usage(probe).free
+        usage = shutil.disk_usage(probe)
     except OSError:
+        return
+    free = usage.free
+    if usage.total == 0:  # a pseudo file system (/proc): writing there fails on its own, with its reason
         return
     if nbytes > free:
         raise InputError(f"{what}: needs about {_bytes(nbytes)} of disk under '{path}', {_bytes(free)} free "
@@ -215,20 +218,8 @@ def output_file(path: str | Path, what: str) -> Path:
     return path
 
 
-_OS_HINTS = {
-    "ENOSPC": "disk full: free space or write elsewhere",
-    "EDQUOT": "disk quota exceeded: free space or write elsewhere",
-    "EROFS": "read-only file system: write elsewhere",
-    "EACCES": "no permission: write elsewhere or fix the permissions",
-    "EPERM": "not permitted: write elsewhere or fix the permissions",
-    "ENOTDIR": "a file stands where a directory must be",
-}
-
-
 def os_error_message(exc: OSError) -> str:
-    """One line for a file-system error that names the path (disk full, permission, read-only, ...)."""
-    import errno
+    """One line for a file-system error, naming the path when the error carries one."""
+    from suctionbench.io import os_error_reason
 
-    hint = _OS_HINTS.get(errno.errorcode.get(exc.errno or 0, ""), "")
-    reason = exc.strerror or type(exc).__name__
-    return f"'{exc.filename}': {reason}" + (f" ({hint})" if hint else "")
+    return f"'{exc.filename}': {os_error_reason(exc)}" if exc.filename else os_error_reason(exc)

@@ -24,7 +24,7 @@ from rich.text import Text
 from typer.core import _click
 
 from suctionbench.errors import InputError
-from suctionbench.io import json_safe
+from suctionbench.io import WRITE_ERRNOS, json_safe
 from suctionbench.validate import OPTION_RULES, Rule, os_error_message
 
 FINITE = Rule()
@@ -142,7 +142,7 @@ def run_command(as_json: bool, body: Callable[[], dict[str, Any]]) -> None:
     except InputError as exc:
         fail_input(str(exc), as_json)
     except OSError as exc:
-        if exc.filename is None:  # not about a file the user named: a bug
+        if exc.filename is None and exc.errno not in WRITE_ERRNOS:  # not about a file or a full disk: a bug
             fail_internal(exc, as_json)
         fail_input(os_error_message(exc), as_json)
     except MemoryError:

@@ -146,7 +146,10 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
         else:
             _check_same_run(staging, run)
     log_dir = staging / "trials"
-    log_dir.mkdir(parents=True, exist_ok=True)
+    try:
+        log_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"output '{out}': cannot create it ({exc.strerror})") from None
     for stale in log_dir.glob(".*.part"):  # logs a killed run did not finish: those trials run again
         stale.unlink()
     with atomic_path(staging / "run.json") as tmp:

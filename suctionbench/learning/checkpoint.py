@@ -101,6 +101,7 @@ def save_model(directory: str | Path, model: GQCNNModel) -> Path:
     directory = Path(directory)
     weights = directory / WEIGHTS_NAME
     tensors = {k: v.detach().to("cpu").contiguous().clone() for k, v in model.network.state_dict().items()}
+    check_finite_weights(tensors, f"model to save in '{directory}'")  # a diverged network is not a model
     with atomic_path(weights) as tmp:
         save_file(tensors, str(tmp), metadata={"format": CARD_FORMAT, "arch": model.arch})
     card = dict(model.card)
@@ -132,6 +133,15 @@ def read_model_card(directory: str | Path) -> dict[str, Any]:
     return card
 
 
+def check_finite_weights(tensors: dict[str, torch.Tensor], what: str) -> None:
+    """InputError naming `what` and the first bad tensor if any floating-point tensor holds NaN or
+    infinities: such a network predicts NaN (or nothing sensible) for every grasp."""
+    bad = [name for name, tensor in tensors.items()
+           if tensor.is_floating_point() and not bool(torch.isfinite(tensor).all())]
+    if bad:
+        raise InputError(f"{what}: {len(bad)} tensor(s) hold NaN or infinite values (first: {bad[0]})")
+
+
 def load_model(directory: str | Path, device: str = "cpu") -> GQCNNModel:
     """A trained model from `directory`, on `device` (CPU by default); InputError if it is missing or corrupt."""
     from safetensors import SafetensorError
@@ -148,6 +158,7 @@ def load_model(directory: str | Path, device: str = "cpu") -> GQCNNModel:
         tensors = load_file(str(weights))
     except (SafetensorError, OSError, ValueError) as exc:
         raise InputError(f"model weights '{weights}': unreadable ({exc})") from None
+    check_finite_weights(tensors, f"model weights '{weights}'")
     network = build_model(card["arch"])
     try:
         network.load_state_dict(tensors, strict=True)

@@ -156,6 +156,21 @@ def label_memory(grasps: int, samples: int) -> float:
     return grasps * (samples + BYTES_PER_GRASP) + chunk * BYTES_PER_SAMPLE
 
 
+MAX_GRASP_OFFSET = 0.005
+"""A grasp point farther than this (m) from the mesh surface is rejected as a typo."""
+
+
+def grasp_near_surface(mesh: Any, point: Any, what: str, source: str) -> None:
+    """InputError if `point` (3,) lies farther than MAX_GRASP_OFFSET from the surface of `mesh`
+    (a trimesh in the grasp's frame): one rule for `label --grasp` and `pick --grasp`."""
+    import numpy as np
+
+    _, distance, _ = mesh.nearest.on_surface(np.asarray(point, dtype=float)[None])
+    if distance[0] > MAX_GRASP_OFFSET:
+        raise InputError(f"{what} {np.asarray(point).tolist()} is {distance[0] * 1e3:.1f} mm from the surface of "
+                         f"{source} (at most {MAX_GRASP_OFFSET * 1e3:g} mm)")
+
+
 # -- files -----------------------------------------------------------------------------------------
 
 

@@ -129,7 +129,14 @@ def bench_plan_cmd(
 
         if scenes < 1:
             raise InputError(f"--scenes {scenes}: must be at least 1")
-        result = bench_plan(policies=[p for p in policies.split(",") if p], model=model, scenes=scenes, seed=seed,
+        names = [p.strip() for p in policies.split(",") if p.strip()]
+        if not names:
+            raise InputError(f"--policies '{policies}': name at least one policy")
+        if model is not None:
+            from suctionbench.learning.checkpoint import load_model
+
+            load_model(model)  # a missing or corrupt model fails before any timing
+        result = bench_plan(policies=names, model=model, scenes=scenes, seed=seed,
                             cores=cores)
         if not as_json:
             print_kv("bench plan", result)

@@ -14,10 +14,7 @@ from rich.table import Table
 
 from suctionbench.cli.common import JsonOpt, SeedOpt, app, err, parse_vector, progress_bar, run_command
 from suctionbench.errors import InputError
-from suctionbench.validate import label_memory, output_file, require_memory
-
-MAX_GRASP_OFFSET = 0.005
-"""A --grasp point farther than this (m) from the mesh surface is rejected as a typo."""
+from suctionbench.validate import grasp_near_surface, label_memory, output_file, require_memory
 
 
 @app.command()
@@ -75,12 +72,7 @@ def label(
             if abs(norm - 1.0) > 1e-3:
                 raise InputError(f"--grasp approach {approach.tolist()}: length {norm:.4g}, must be a unit vector")
             approach = approach / norm
-            _, distance, _ = info.mesh.nearest.on_surface(point[None])
-            if distance[0] > MAX_GRASP_OFFSET:
-                raise InputError(
-                    f"--grasp point {point.tolist()} is {distance[0] * 1e3:.1f} mm from the surface of "
-                    f"'{mesh}' (at most {MAX_GRASP_OFFSET * 1e3:g} mm)"
-                )
+            grasp_near_surface(info.mesh, point, "--grasp point", f"'{mesh}'")
             labels = labeller.label(point[None], approach[None], seed)
             record = grasp_record(labels, 0)
             if not as_json:

@@ -48,6 +48,10 @@ def pick(
             values = parse_vector(grasp, 6, "--grasp")
             if abs(np.linalg.norm(values[3:]) - 1.0) > 1e-3:
                 raise InputError(f"--grasp approach {values[3:].tolist()}: must be a unit vector")
+            from suctionbench.objects.registry import load_object
+            from suctionbench.validate import grasp_near_surface
+
+            grasp_near_surface(load_object(object_key).mesh(), values[:3], "--grasp point", f"'{object_key}'")
         request = PickRequest(
             object_key, seed=seed, grasp=values, policy=policy, placement=placement, cup=cup_preset(cup),
             camera=camera, model=model, metric=metric, policy_args=parse_policy_args(policy_arg or []),

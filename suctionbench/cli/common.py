@@ -17,6 +17,7 @@ from typing import Annotated, Any, get_args
 
 import numpy as np
 import typer
+from rich import box
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColumn, TextColumn, TimeRemainingColumn
 from rich.table import Table
@@ -228,7 +229,7 @@ def print_rows(title: str, rows: list[dict[str, Any]]) -> None:
     if not rows:
         err.print(f"{title}: none")
         return
-    table = Table(title=title)
+    table = Table(title=title, box=box.SIMPLE_HEAD, pad_edge=False)  # no vertical rules: 80 columns hold more
     for col in rows[0]:
         table.add_column(col)
     for row in rows:

@@ -72,18 +72,27 @@ def eval_cmd(
                                    overwrite=overwrite, progress=advance)
         if not as_json:
             known = bool(the_task.metrics)  # the paper's known-objects table: accuracy and Spearman too
-            rows = [{"policy": r["label"], "set": r["set"],  # short headers: 80 columns hold the table
-                     "trials": r["trials"], "AP": r["ap"], "success": r["success_rate"],
-                     **({"acc.": r["accuracy_q"], "rho": r["spearman_q"]} if known else {}),
-                     "label prec.": r["label_precision"], "picks/h": r["picks_per_hour"],
-                     "invalid": r["invalid"]} for m, r in runs.items()]
+            pct = _percent  # percentages and short headers: 80 columns hold the table
+            rows = [{"policy": r["label"], "set": r["set"], "n": r["trials"], "AP%": pct(r["ap"]),
+                     "succ%": pct(r["success_rate"]),
+                     **({"acc%": pct(r["accuracy_q"]), "rho": r["spearman_q"]} if known else {}),
+                     "prec%": pct(r["label_precision"]), "picks/h": r["picks_per_hour"],
+                     "inv": r["invalid"]} for m, r in runs.items()]
             print_rows(f"eval {the_task.name}", rows)
+            Console().print("n: trials; AP%: average precision of q; succ%: success rate; "
+                            + ("acc%: accuracy of q > 0.5; rho: Spearman of q; " if known else "")
+                            + "prec%: success among grasps labelled robust (rwr > 0.5); picks/h: picks per hour "
+                            "(simulated motion + modelled compute); inv: invalid trials", highlight=False)
             if known and policy != "analytic":  # executed grasps scored by each 3D metric
                 print_rows("3D metrics against simulated success",
                             [{"metric": m, **stats} for r in runs.values() for m, stats in r["by_metric"].items()])
         return {"out": str(out), "runs": runs} if len(runs) > 1 else {"out": str(out), **next(iter(runs.values()))}
 
     run_command(as_json, body)
+
+
+def _percent(value: float | None) -> str:
+    return "-" if value is None else f"{100 * value:.1f}"
 
 
 @app.command()

@@ -11,10 +11,11 @@ import numpy as np
 import typer
 from rich.console import Console
 from rich.table import Table
+from rich.text import Text
 
 from suctionbench.cli.common import JsonOpt, SeedOpt, app, err, parse_vector, progress_bar, run_command
 from suctionbench.errors import InputError
-from suctionbench.validate import grasp_near_surface, label_memory, output_file, require_memory
+from suctionbench.validate import MAX_GRASP_OFFSET, grasp_near_surface, label_memory, output_file, require_memory
 
 
 @app.command()
@@ -49,12 +50,19 @@ def label(
             raise InputError("--out needs --grasps (a single --grasp is printed, not written)")
         if out is not None:
             output_file(out, "--out")
+            if out.suffix != ".npz":  # never write labels over a file of another kind
+                raise InputError(f"--out '{out}': expected a .npz file name")
         require_memory(label_memory(grasps or 1, samples), f"--grasps {grasps or 1} x --samples {samples}")
         config = LabelConfig(
             cup=cup_preset(cup), perturbation=replace(PerturbationConfig(), num_samples=samples)
         )
         info = load_mesh(mesh, units=units.lower())
         com_vec = parse_vector(com, 3, "--com") if com is not None else None
+        if com_vec is not None:
+            low, high = info.mesh.bounds
+            if np.any(com_vec < low - MAX_GRASP_OFFSET) or np.any(com_vec > high + MAX_GRASP_OFFSET):
+                raise InputError(f"--com {com_vec.tolist()}: outside the bounding box of '{mesh}' "
+                                 f"({low.round(4).tolist()} to {high.round(4).tolist()} m)")
         labeller = SuctionLabeller(info, config, mass=mass, com=com_vec)
         warnings = list(info.warnings)
         if mass > config.cup.payload_kg:
@@ -62,8 +70,10 @@ def label(
                 f"mass {mass:g} kg exceeds the '{config.cup.name}' cup's vacuum payload "
                 f"{config.cup.payload_kg:.3g} kg: no grasp can hold it (pass --mass)"
             )
-        for line in warnings:
-            err.print(f"[yellow]warning:[/] {line}", highlight=False)
+
+        def warn() -> None:  # after every input is checked: a refused input prints its one error line only
+            for line in warnings:
+                err.print(Text.assemble(("warning:", "yellow"), " ", line), highlight=False)
 
         if grasp is not None:
             values = parse_vector(grasp, 6, "--grasp")
@@ -73,6 +83,7 @@ def label(
                 raise InputError(f"--grasp approach {approach.tolist()}: length {norm:.4g}, must be a unit vector")
             approach = approach / norm
             grasp_near_surface(info.mesh, point, "--grasp point", f"'{mesh}'")
+            warn()
             labels = labeller.label(point[None], approach[None], seed)
             record = grasp_record(labels, 0)
             if not as_json:
@@ -80,6 +91,7 @@ def label(
             return {**record, "mass": mass, "cup": config.cup.name, "samples": samples,
                     "seed": seed, "warnings": warnings}
 
+        warn()
         rng = np.random.default_rng(seed)
         points, approaches = sample_surface_grasps(info.mesh, grasps, rng)
         start = time.perf_counter()

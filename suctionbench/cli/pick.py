@@ -70,6 +70,7 @@ def pick(
 def view(
     object_key: Annotated[str, typer.Option("--object", help="Object SET/NAME.")] = "basic/box_tea",
     seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
 ) -> None:
     """Open the scene in MuJoCo's interactive viewer (needs a display)."""
 
@@ -83,6 +84,6 @@ def view(
         runner = PickRunner(PickRequest(object_key, seed=seed))
         runner.episode.reset(np.random.default_rng(seed))
         mujoco.viewer.launch(runner.scene.model, runner.episode.data)
-        return {}
+        return {"object": object_key, "seed": seed}
 
-    run_command(False, body)
+    run_command(as_json, body)

@@ -1,0 +1,246 @@
+"""The CLI contract under bad input (issue 14): every bad option value or malformed file exits 2
+with one stderr line naming the input, no traceback, a strict JSON error line under --json, and
+nothing of the user's written over or deleted.
+
+Two sources of bad input: Hypothesis draws values that break each numeric option's rule
+(`suctionbench.validate.OPTION_RULES`) for every command, and `fuzz_corpus` builds malformed meshes,
+camera and task TOMLs, datasets, models and run directories. Good inputs from the same corpus
+must pass, so the checks cannot pass by refusing everything.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import typer
+from fuzz_corpus import build_corpus, cases, classify
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from typer.testing import CliRunner
+
+from suctionbench.cli import app
+from suctionbench.cli.common import emit, numeric_type
+from suctionbench.validate import OPTION_RULES, Rule
+
+runner = CliRunner()
+
+HEAVY = {"pick", "bench agreement", "bench label", "bench plan", "bench episode", "bench generate",
+         "objects generate", "objects build", "objects stats", "objects import"}
+"""Commands whose corpus cases load the simulator or build objects: run under `slow` only."""
+
+STUBS = {  # required arguments: parsing stops at the bad option before any of these is used
+    "label": ["mesh.stl"], "pick": ["--object", "basic/box_tea"],
+    "generate": ["--objects", "basic", "--datapoints", "1", "--out", "o"],
+    "dataset show": ["d"], "train": ["--dataset", "d", "--out", "o"], "model show": ["m"],
+    "eval": ["--policy", "centroid", "--set", "basic", "--out", "o"], "report": ["r", "--out", "o"],
+    "objects show": ["basic/x"], "objects import": ["m.stl"], "plan": ["--depth", "d.npy"],
+}
+
+
+def strict_json(text: str) -> dict:
+    """The last line of `text` parsed as strict JSON (NaN / Infinity refused, as JavaScript does)."""
+    def refuse(constant: str):
+        raise ValueError(f"non-standard JSON constant {constant}")
+
+    return json.loads(text.strip().splitlines()[-1], parse_constant=refuse)
+
+
+def numeric_options() -> list[tuple[str, str, type]]:
+    """(command path, option flag, int or float) for every numeric option of every command."""
+    found = []
+
+    def walk(command, path: list[str]) -> None:
+        for param in command.params:
+            kind = numeric_type(param)
+            if kind is not None and param.opts and param.opts[0].startswith("--"):
+                found.append((" ".join(path), param.opts[0], kind))
+        for name, sub in sorted(getattr(command, "commands", {}).items()):
+            walk(sub, [*path, name])
+
+    walk(typer.main.get_command(app), [])
+    return found
+
+
+OPTIONS = numeric_options()
+
+
+def test_every_numeric_option_has_a_rule():
+    """A new numeric option must say what its valid values are (suctionbench/validate.py OPTION_RULES)."""
+    assert len(OPTIONS) > 30
+    missing = sorted({flag for _, flag, _ in OPTIONS if flag[2:].replace("-", "_") not in OPTION_RULES})
+    assert not missing, f"add a Rule to suctionbench.validate.OPTION_RULES for {missing}"
+
+
+def bad_values(rule: Rule, kind: type) -> st.SearchStrategy[str]:
+    """Command-line strings that break `rule` for an option of type `kind`."""
+    options = [st.sampled_from(["abc", "", "1,2", "--", "0x10"] + (["nan", "inf", "-inf"] if kind is float else
+                                                                      ["1.5", "1e3"]))]
+    if rule.low is not None:
+        below = st.integers(max_value=math.ceil(rule.low) - 1) if kind is int else \
+            st.floats(max_value=rule.low, exclude_max=not rule.low_open, allow_nan=False, allow_infinity=False)
+        options.append(below.map(str))
+    if rule.high is not None:
+        above = st.integers(min_value=math.floor(rule.high) + 1) if kind is int else \
+            st.floats(min_value=rule.high, exclude_min=True, allow_nan=False, allow_infinity=False)
+        options.append(above.map(str))
+    return st.one_of(*options)
+
+
+def option_and_bad_value() -> st.SearchStrategy[tuple[str, str, str]]:
+    def pick(option: tuple[str, str, type]) -> st.SearchStrategy[tuple[str, str, str]]:
+        command, flag, kind = option
+        rule = OPTION_RULES.get(flag[2:].replace("-", "_"), Rule())
+        return bad_values(rule, kind).map(lambda value: (command, flag, value))
+
+    return st.sampled_from(OPTIONS).flatmap(pick)
+
+
+def assert_clean_exit_2(result, *, as_json: bool, needle: str | None = None) -> str:
+    stderr = result.stderr
+    assert result.exit_code == 2, (result.exit_code, result.stdout[-500:], stderr[-2000:])
+    assert "Traceback" not in stderr
+    lines = [line for line in stderr.splitlines() if line.strip()]
+    assert len(lines) == 1, lines
+    if needle is not None:
+        assert needle in lines[0], lines[0]
+    if as_json:
+        reply = strict_json(result.stdout)
+        assert reply["ok"] is False and reply["error"]
+    return lines[0]
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(option_and_bad_value(), st.booleans())
+def test_bad_numeric_option_exits_2_with_one_line(case, as_json):
+    command, flag, value = case
+    argv = [*command.split(), *STUBS.get(command, []), f"{flag}={value}", *(["--json"] if as_json else [])]
+    result = runner.invoke(app, argv)
+    assert_clean_exit_2(result, as_json=as_json, needle=flag)
+
+
+@pytest.mark.slow
+@settings(max_examples=600, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(option_and_bad_value(), st.booleans())
+def test_bad_numeric_option_exits_2_many(case, as_json):
+    test_bad_numeric_option_exits_2_with_one_line.hypothesis.inner_test(case, as_json)
+
+
+@pytest.mark.parametrize("argv", [
+    ["label", "no-such-mesh.stl", "--grasps", "1", "--seed", "0", "--top", "0", "--mass", "0.001"],
+    ["label", "no-such-mesh.stl", "--grasps", "1", "--seed", "4294967295", "--samples", "1"],
+    ["eval", "--policy", "centroid", "--set", "nope", "--workers", "0", "--trials", "1", "--out", "o"],
+])
+def test_rules_accept_their_bounds(argv):
+    """The rules do not refuse valid values: bounds themselves pass parsing, and the command fails
+    later, on the missing mesh or unknown set."""
+    result = runner.invoke(app, argv)
+    assert result.exit_code == 2 and ("no-such-mesh" in result.stderr or "'nope'" in result.stderr), result.stderr
+
+
+def test_usage_errors_are_one_line():
+    for argv in (["label", "m.stl", "--bogus"], ["nope"], ["eval", "--policy"], ["label", "m.stl", "--grasps", "x"]):
+        for as_json in (False, True):
+            assert_clean_exit_2(runner.invoke(app, argv + (["--json"] if as_json else [])), as_json=as_json)
+
+
+def test_messages_are_plain_text_not_markup():
+    """'[ray]' in a message is printed as written (rich would read it as a style tag and drop it)."""
+    result = runner.invoke(app, ["eval", "--policy", "centroid", "--set", "[ray]", "--out", "o"])
+    assert "[ray]" in assert_clean_exit_2(result, as_json=False)
+
+
+def test_json_output_is_strict(capsys):
+    emit({"q": float("-inf"), "a": np.float32("nan"), "v": np.array([1.0, np.inf]), "n": {"x": (float("nan"),)}},
+         True)
+    reply = strict_json(capsys.readouterr().out)
+    assert reply == {"q": None, "a": None, "v": [1.0, None], "n": {"x": [None]}}
+
+
+# -- the corpus ------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def corpus(tmp_path_factory):
+    return build_corpus(tmp_path_factory.mktemp("fuzz") / "corpus")
+
+
+def _case_params():
+    """One pytest param per corpus case; paths are resolved against the real corpus in the test."""
+    import tempfile
+
+    root = Path(tempfile.gettempdir()) / "suctionbench-fuzz-ids"
+    placeholder = {name: root / name for name in CORPUS_NAMES}
+    placeholder["root"] = root
+    params = []
+    for i, case in enumerate(cases(placeholder)):
+        marks = [pytest.mark.slow] if case.command in HEAVY else []
+        params.append(pytest.param(i, id=f"{i:03d}-{case.command.replace(' ', '-')}", marks=marks))
+    return params
+
+
+CORPUS_NAMES = [
+    "box", "mesh_empty.obj", "mesh_garbage.stl", "mesh_truncated.obj", "mesh_words.ply", "file.txt", "a_dir",
+    "cam_huge.toml", "cam_1px.toml", "cam_tiny_f.toml", "cam_far.toml", "cam_nan.toml", "cam_types.toml",
+    "cam_binary.toml", "task_types.toml", "task_binary.toml", "task_zero.toml", "task_negseed.toml",
+    "task_poses.toml", "task_metrics.toml", "task_placement.toml", "task_unknown_key.toml", "task_huge.toml",
+    "task_set.toml", "ds_good", "ds_no_shard", "ds_truncated", "ds_no_manifest", "ds_bad_manifest", "ds_no_tensors",
+    "ds_empty_card", "ds_bad_card", "ds_no_card", "ds_no_splits", "ds_nan", "model_good", "model_nan",
+    "model_truncated", "model_bad_card", "model_no_weights", "model_empty", "run_good", "run_killed", "run_killed0",
+    "run_extra", "run_truncated_json", "run_list_json", "run_empty_json", "run_no_trials", "run_bad_log",
+]
+
+
+def test_corpus_names_are_complete(corpus):
+    assert set(corpus) == {*CORPUS_NAMES, "root"}
+
+
+@pytest.mark.parametrize("index", _case_params())
+@pytest.mark.parametrize("as_json", [False, True], ids=["plain", "json"])
+def test_corpus_case_exits_2_and_keeps_files(corpus, index, as_json):
+    case = cases(corpus)[index]
+    if case.setup:
+        case.setup()
+    before = [p.read_bytes() for p in case.keep]
+    result = runner.invoke(app, case.argv + (["--json"] if as_json else []))
+    changed = [p.read_bytes() if p.is_file() else None for p in case.keep] != before
+    outcome = classify(result.exit_code, result.stdout, result.stderr, as_json, changed)
+    assert outcome == "clean", (outcome, result.exit_code, case.name, result.stderr[-1500:])
+
+
+@pytest.mark.parametrize("argv", [
+    ["dataset", "show", "{ds_good}"],
+    ["model", "show", "{model_good}"],
+    ["report", "{run_good}", "--out", "{root}/report_good"],
+    ["report", "{run_killed}", "--out", "{root}/report_killed", "--allow-incomplete"],
+])
+def test_good_corpus_inputs_pass(corpus, argv):
+    """Positive controls: the checks that refuse the damaged copies accept the originals."""
+    result = runner.invoke(app, [a.format(**corpus) for a in argv] + ["--json"])
+    assert result.exit_code == 0, result.stderr[-1500:]
+    reply = strict_json(result.stdout)
+    assert reply["ok"] is True
+    if "--allow-incomplete" in argv:
+        assert reply["incomplete"][0]["found_trials"] == 1 and "incomplete 1/3" in reply["rows"][0]["policy"]
+    elif argv[0] == "report":
+        assert reply["incomplete"] == [] and reply["rows"][0]["trials"] == 3
+
+
+def test_overwrite_replaces_only_a_dataset(corpus, tmp_path):
+    import shutil
+
+    from suctionbench.dataset.verify import remove_dataset
+
+    mine = tmp_path / "mine"
+    shutil.copytree(corpus["ds_good"], mine)
+    remove_dataset(mine)
+    assert not any(mine.iterdir())
+    theirs = tmp_path / "theirs"
+    shutil.copytree(corpus["ds_good"], theirs)
+    (theirs / "splits" / "notes.txt").write_text("mine")
+    with pytest.raises(Exception, match="notes.txt"):
+        remove_dataset(theirs)
+    assert (theirs / "splits" / "notes.txt").is_file() and (theirs / "config.json").is_file()

@@ -1,0 +1,159 @@
+"""Faults (issue 14): pool workers die with a killed parent, a killed eval is resumable and reported
+as incomplete meanwhile, a full disk is an input error naming the path with nothing half-written."""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from suctionbench.cli import app
+
+runner = CliRunner()
+ORPHAN_GRACE_S = 5.0
+"""How long a pool worker may outlive its killed parent."""
+
+
+def alive(pid: int) -> bool:
+    """True if `pid` runs (a zombie waiting for its reaper counts as gone)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (FileNotFoundError, ProcessLookupError, IndexError):
+        return False
+    return state != "Z"
+
+
+def wait_gone(pids: list[int], timeout: float = ORPHAN_GRACE_S) -> list[int]:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        left = [p for p in pids if alive(p)]
+        if not left:
+            return []
+        time.sleep(0.1)
+    return [p for p in pids if alive(p)]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_pool_workers_die_with_their_killed_parent():
+    script = textwrap.dedent("""
+        import os, sys, time
+        from suctionbench.parallel import process_pool
+        pool = process_pool(2)
+        futures = [pool.submit(time.sleep, 120) for _ in range(2)]
+        while len(pool._processes) < 2:
+            time.sleep(0.05)
+        time.sleep(0.5)  # the initializers have run
+        print(" ".join(str(p) for p in pool._processes), flush=True)
+        time.sleep(120)
+    """)
+    parent = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    try:
+        workers = [int(p) for p in parent.stdout.readline().split()]
+        assert len(workers) == 2 and all(alive(p) for p in workers)
+        parent.send_signal(signal.SIGKILL)
+        parent.wait()
+        left = wait_gone(workers)
+    finally:
+        parent.kill()
+    for pid in left:  # clean up before failing
+        os.kill(pid, signal.SIGKILL)
+    assert not left, f"workers {left} outlived their parent by {ORPHAN_GRACE_S} s"
+
+
+def child_pids(pid: int) -> list[int]:
+    out = subprocess.run(["pgrep", "-P", str(pid)], capture_output=True, text=True).stdout
+    return [int(p) for p in out.split()]
+
+
+@pytest.mark.slow
+def test_killed_eval_no_orphans_refused_report_then_resume_equals_a_full_run(tmp_path):
+    """kill -9 of an eval with 2 workers after its first trial log: no worker survives, the run is
+    OUT.incomplete and report refuses it (or marks it), eval --resume finishes it, and its results
+    equal those of an uninterrupted run (trials are seeded by index)."""
+    out = tmp_path / "run"
+    cmd = [sys.executable, "-m", "suctionbench", "eval", "--policy", "centroid", "--set", "basic", "--trials", "6",
+           "--workers", "2", "--seed", "3", "--out", str(out)]
+    parent = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    logs = tmp_path / "run.incomplete" / "trials"
+    deadline = time.monotonic() + 240
+    while time.monotonic() < deadline and not list(logs.glob("trial_*.mcap")):
+        time.sleep(0.2)
+    workers = child_pids(parent.pid)
+    parent.send_signal(signal.SIGKILL)
+    parent.wait()
+    assert list(logs.glob("trial_*.mcap")), "no trial finished in time"
+    assert workers and not wait_gone(workers), "pool workers outlived the killed eval"
+    assert not out.exists()
+
+    result = runner.invoke(app, ["report", str(out), "--out", str(tmp_path / "rep"), "--json"])
+    assert result.exit_code == 2 and "incomplete" in json.loads(result.stdout.splitlines()[-1])["error"]
+    assert not (tmp_path / "rep").exists()
+    result = runner.invoke(app, ["eval", *cmd[4:], "--json"])
+    assert result.exit_code == 2 and "--resume" in result.stderr
+
+    resumed = runner.invoke(app, ["eval", *cmd[4:], "--resume", "--json"])
+    assert resumed.exit_code == 0, resumed.stderr[-2000:]
+    assert not (tmp_path / "run.incomplete").exists()
+    fresh = runner.invoke(app, ["eval", *cmd[4:-1], str(tmp_path / "fresh"), "--json"])
+    assert fresh.exit_code == 0, fresh.stderr[-2000:]
+    a, b = (json.loads(r.stdout.splitlines()[-1]) for r in (resumed, fresh))
+    keys = ("trials", "invalid", "success_rate", "ap", "outcomes", "per_object", "mean_motion_s")
+    assert {k: a[k] for k in keys} == {k: b[k] for k in keys}
+
+
+@pytest.fixture
+def full_disk(tmp_path):
+    """A 256 KiB tmpfs filled up (root on Linux only; skipped elsewhere)."""
+    mount = tmp_path / "small"
+    mount.mkdir()
+    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=256k", "tmpfs", str(mount)],
+                                           capture_output=True).returncode != 0:
+        pytest.skip("cannot mount a small tmpfs here")
+    try:
+        with open(mount / "filler", "wb", buffering=0) as fh:
+            try:
+                while True:
+                    fh.write(b"\0" * 4096)
+            except OSError as exc:
+                assert exc.errno == errno.ENOSPC
+        yield mount
+    finally:
+        subprocess.run(["umount", "-l", str(mount)], check=False)
+
+
+@pytest.fixture
+def box_mesh(tmp_path) -> Path:
+    import trimesh
+
+    path = tmp_path / "box.stl"
+    trimesh.creation.box(extents=(0.06, 0.04, 0.02)).export(path)
+    return path
+
+
+def test_full_disk_is_an_input_error_naming_the_path(full_disk, box_mesh):
+    out = full_disk / "labels.npz"
+    result = runner.invoke(app, ["label", str(box_mesh), "--grasps", "20", "--samples", "5", "--mass", "0.1",
+                                 "--out", str(out), "--json"])
+    assert result.exit_code == 2, result.stderr
+    error = json.loads(result.stdout.splitlines()[-1])["error"]
+    assert str(out) in error and "No space left" in error and "Traceback" not in result.stderr
+    assert sorted(p.name for p in full_disk.iterdir()) == ["filler"]  # no temporary file left
+
+
+def test_report_on_a_full_disk_writes_nothing(full_disk, tmp_path):
+    from fuzz_corpus import write_run
+
+    run = write_run(tmp_path / "run")
+    result = runner.invoke(app, ["report", str(run), "--out", str(full_disk / "report"), "--json"])
+    assert result.exit_code == 2, result.stderr
+    assert "No space left" in json.loads(result.stdout.splitlines()[-1])["error"]
+    assert sorted(p.name for p in full_disk.iterdir()) == ["filler"]  # all or nothing: no half report

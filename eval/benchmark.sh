@@ -12,7 +12,7 @@ run() {  # name, eval options...; a finished run (its .done marker) is kept
   local name=$1; shift
   [ -f "$RUNS/$name.done" ] && return
   rm -rf "${RUNS:?}/$name"
-  $SB eval "$@" --workers 2 --seed 0 --out "$RUNS/$name" --json > "$RUNS/$name.json"
+  $SB eval "$@" --workers 2 --seed 0 --out "$RUNS/$name" --resume --json > "$RUNS/$name.json"
   touch "$RUNS/$name.done"
 }
 for set in basic typical adversarial; do

@@ -13,10 +13,11 @@ from the distance at which a pressed lip rests (the contact margin), and integra
 A = sum max(gap - seal_gap, 0) x arc. The ejector holds the vacuum p(A) where its flow curve meets
 the leak's orifice flow (`suctionbench.vacuum.equilibrium_vacuum`); the cup's pressure follows p(A)
 with a first-order time constant (the cup and hose volume evacuated by the ejector's flow), as
-MuJoCo actuator state. The pressure pulls the object toward the cup's body with V x p / p_max
-(V = p_max x effective area) and the body toward the object, squeezing the lip between them: a
-MuJoCo `adhesion` actuator (gain V, ctrl = p / p_max) on a probe sphere on the cup's axis whose
-only contacts are inactive ones with objects. The lip's contacts carry the rest: a torque about
+MuJoCo actuator state. The pressure pulls the object toward the cup with V x p / p_max
+(V = p_max x effective area) and the tool toward the object, so the bellows contracts and the lip
+is squeezed between its end and the object: a MuJoCo `adhesion` actuator (gain V, ctrl = p / p_max)
+on a probe sphere on the bellows' axis whose only contacts are inactive ones with objects, and the
+same force along the bellows' slide. The lip's contacts carry the rest: a torque about
 the lip is resisted only until one side's contact force reaches zero and the lip opens there (the
 ring-pressure peel limit r (V - m g) / 2 emerges from the contact forces; it is not coded). The
 seal breaks when the cup's vacuum falls below the ejector's part-present switch
@@ -95,6 +96,11 @@ class SimCupConfig:
     tilt_damping: float = 0.01
     """Bellows tilt damping (N m s/rad): silicone bellows are lossy."""
 
+    tilt_armature: float = 1e-5
+    """Armature (kg m^2) of the bellows' tilt hinges. MuJoCo's limit stiffness scales with the dof's
+    inertia; the bellows' own (~1e-6 kg m^2) lets a lip pressed with ~6 N tilt 1.5 deg past the
+    limit, 1e-5 keeps it to ~0.2 deg."""
+
     lip_damping_ratio: float = 1.0
     """Damping of each lip point's fold, as a fraction of critical (lossy silicone: no ringing)."""
 
@@ -111,9 +117,12 @@ class SimCupConfig:
     bellow_mass: float = 0.006
     """Mass of the bellows (kg)."""
 
-    contact_solref: tuple[float, float] = (0.004, 1.0)
-    """MuJoCo solref of lip contacts and of the bellows' and lip's travel limits (time constant = 2
-    timesteps, critically damped): as stiff as the 2 ms step allows."""
+    contact_solref: tuple[float, float] = (0.004, 2.0)
+    """MuJoCo solref of lip contacts and of the bellows' and lip's travel limits: time constant = 2
+    timesteps (as stiff as the 2 ms step allows), damping ratio 2. Critically damped (1), a 0.2 kg
+    object hanging on the lip under the vacuum's pull rings in a ~35 Hz limit cycle of +-0.5 mm
+    (the light lip points between two stiff constraints), which also lets it walk sideways under
+    the lip; at 2 it rests still, 0.1 mm into the lip's margin."""
 
     contact_solimp: tuple[float, float, float] = (0.95, 0.99, 0.0005)
     """MuJoCo solimp of lip contacts (impedance rising to 0.99 within 0.5 mm)."""
@@ -158,6 +167,9 @@ class SimCupConfig:
 
     rigid_lip_mass: float = 0.02
     """Rigid reference only: mass of its rigid lip ring (kg)."""
+
+    rigid_contact_solref: tuple[float, float] = (0.004, 1.0)
+    """Rigid reference only: its lip contacts' solref (as it was)."""
 
     rigid_sphere_radius: float = 0.0015
     """Rigid reference only: radius of its lip spheres (m)."""
@@ -231,6 +243,7 @@ def add_suction_tool(
     # wall can compress by at most the stroke while the other is uncompressed: the lip plane tilts
     # by at most atan(stroke / 2r) (21.8 deg for the default cup).
     max_tilt = math.atan2(cup.stroke, 2.0 * cup.radius)
+    max_tilt *= 180.0 / math.pi if spec.compiler.degree else 1.0  # hinge ranges are in the spec's unit
     bellow.add_joint(
         name=f"{prefix}_compress", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1],
         stiffness=cup.axial_stiffness, damping=sim.axial_damping, range=[-cup.stroke, 0.0],
@@ -240,7 +253,7 @@ def add_suction_tool(
         bellow.add_joint(
             name=f"{prefix}_{label}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=axis, pos=[0, 0, cup.height],
             stiffness=cup.bending_stiffness, damping=sim.tilt_damping, range=[-max_tilt, max_tilt],
-            limited=True, armature=1e-6, solref_limit=list(sim.contact_solref),
+            limited=True, armature=sim.tilt_armature, solref_limit=list(sim.contact_solref),
         )
     shell_len = (1.0 - sim.shell_height_fraction) * cup.height
     bellow.add_geom(
@@ -272,7 +285,8 @@ def add_suction_tool(
             lip.add_geom(
                 name=names[-1], pos=[cup.radius * math.cos(angle), cup.radius * math.sin(angle), 0.0],
                 condim=6, mass=sim.rigid_lip_mass / n, friction=[cup.friction, 0.005, 0.0001],
-                **{**lip_geom, "size": [rho, 0, 0]}, gap=sim.rigid_release_gap,
+                **{**lip_geom, "size": [rho, 0, 0], "solref": list(sim.rigid_contact_solref)},
+                gap=sim.rigid_release_gap,
             )
         spec.add_actuator(name=f"{prefix}_vacuum", target=f"{prefix}_lip", gainprm=[cup.vacuum_force] + [0] * 9,
                           **vacuum)
@@ -303,12 +317,15 @@ def add_suction_tool(
         names.append(f"{prefix}_lip_{i}")
         body.add_geom(name=names[-1], condim=3, mass=point_mass, friction=[cup.friction, 0.0, 0.0],
                       gap=sim.contact_gap, **lip_geom)
-    # The vacuum: the pressure inside the lip pulls the object toward the cup's body (and the body
-    # toward the object), squeezing the lip between them. MuJoCo's adhesion acts along contact
-    # normals, so the cup's body carries a small probe sphere on the axis, behind where the lip can
-    # fold to, that touches nothing but objects (VACUUM_CONTYPE) and whose contacts with them are
-    # never active (margin 0, gap: the cup's height): through them the actuator applies V x p / p_max
-    # at the point of the object nearest the cup's axis.
+    # The vacuum. The pressure p inside the cup pulls the object toward the cup (p x effective area
+    # on the object) and the tool toward the object (p x the bellows' cross-section, about the same
+    # for a single bellows as wide as its lip): the bellows contracts and the lip is squeezed between
+    # its end and the object. Two actuators with the same pressure state carry it. (1) MuJoCo's
+    # adhesion acts along contact normals, so the bellows' end carries a small probe sphere on the
+    # axis, behind where the lip can fold to, that touches nothing but objects (VACUUM_CONTYPE) and
+    # whose contacts with them are never active (margin 0, gap: the cup's height): through them
+    # V x p / p_max pulls the object's point nearest the axis and the bellows' end together. (2) The
+    # same force pulls the bellows' end back toward the tool along the bellows' slide.
     setback = cup.lip_travel + sim.probe_clearance + sim.probe_radius
     probe = bellow.add_body(name=f"{prefix}_vacuum", pos=[0, 0, cup.height - setback])
     probe.add_geom(
@@ -317,9 +334,14 @@ def add_suction_tool(
         rgba=[0.9, 0.2, 0.2, 0.3],
     )
     spec.add_actuator(name=f"{prefix}_vacuum", target=probe.name, gainprm=[cup.vacuum_force] + [0] * 9, **vacuum)
+    spec.add_actuator(
+        name=f"{prefix}_vacuum_bellows", target=f"{prefix}_compress",
+        gainprm=[-cup.vacuum_force] + [0] * 9, **{**vacuum, "trntype": mujoco.mjtTrn.mjTRN_JOINT},
+    )
     return CupHandles(
-        tip_site=f"{prefix}_tip", actuators=(f"{prefix}_vacuum",), slide_joint=f"{prefix}_compress",
-        lip_geoms=tuple(names), lip_joints=tuple(joints), bellow_body=f"{prefix}_bellow", cup=cup, sim=sim,
+        tip_site=f"{prefix}_tip", actuators=(f"{prefix}_vacuum", f"{prefix}_vacuum_bellows"),
+        slide_joint=f"{prefix}_compress", lip_geoms=tuple(names), lip_joints=tuple(joints),
+        bellow_body=f"{prefix}_bellow", cup=cup, sim=sim,
     )
 
 

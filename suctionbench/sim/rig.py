@@ -58,6 +58,11 @@ class RigResult:
     """Lip gaps (m) at the end of the dwell."""
     peak_acceleration: float = 0.0
     """Largest acceleration (m/s^2) of the carriage during the lift."""
+    peak_gravity_torque: float = 0.0
+    """Largest gravity torque (N m) of the object about the lip centre while it hung sealed and clear
+    of the floor: m g times the horizontal distance from the lip centre to the centre of mass."""
+    tilt_hanging: float = 0.0
+    """Angle (rad) between the cup axis and the vertical at the end (or when the seal broke)."""
 
 
 def add_box(spec: mujoco.MjSpec, name: str, body: mujoco.MjsBody, size, pos, rgba=(0.8, 0.55, 0.3, 1)) -> None:
@@ -87,6 +92,7 @@ class CupRig:
         timestep: float = 0.002,
     ):
         spec = mujoco.MjSpec()
+        spec.compiler.degree = False
         spec.option.timestep = timestep
         spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
         spec.worldbody.add_geom(
@@ -140,6 +146,35 @@ class CupRig:
                 return k + 1
         return steps
 
+    def hold(self, seconds: float, each_step: Callable[[int], bool] | None = None) -> int:
+        """Keep the carriage where it is for `seconds` (the vacuum as it is), calling
+        `each_step(k)` before each step; stop early when it returns True. Returns the steps run."""
+        here = self.data.ctrl[self.carriage_act].copy()
+        steps = int(round(seconds / self.model.opt.timestep))
+        for k in range(steps):
+            if each_step is not None and each_step(k):
+                return k
+            self.data.ctrl[self.carriage_act] = here
+            self.cup.update(self.data)
+            mujoco.mj_step(self.model, self.data)
+        return steps
+
+    def gravity_torque(self) -> float:
+        """Gravity torque (N m) of everything hanging from the object's subtree about the lip centre:
+        its weight times the horizontal distance from the lip centre to its centre of mass."""
+        m, d = self.model, self.data
+        lever = d.subtree_com[self.object][:2] - self.tip_position()[:2]
+        return float(m.body_subtreemass[self.object] * np.linalg.norm(m.opt.gravity) * np.linalg.norm(lever))
+
+    def clear_of_floor(self) -> bool:
+        """Whether the object hangs free: no contact with the world (within its margin)."""
+        n = self.data.ncon
+        if n == 0:
+            return True
+        bodies = self.model.geom_bodyid[self.data.contact.geom[:n]]
+        mine = (bodies == self.object).any(axis=1) & (bodies == 0).any(axis=1)
+        return not bool(np.any(mine & (self.data.contact.dist[:n] < 0.001)))
+
     def tip_position(self) -> np.ndarray:
         return self.data.site_xpos[self.tip].copy()
 
@@ -173,18 +208,29 @@ class CupRig:
         z0 = d.xipos[self.object][2]
         steps = int(lift_time / dt)
         velocities = []
+        torque = [0.0, 0.0]
+        weight = m.body_subtreemass[self.object] * float(np.linalg.norm(m.opt.gravity))
+
+        def watch() -> bool:
+            if self.cup.sealed == self.object and self.clear_of_floor():
+                lever = d.xipos[self.object][:2] - self.tip_position()[:2]
+                torque[0] = max(torque[0], weight * float(np.linalg.norm(lever)))
+                rot = d.xmat[self.cup.bellow].reshape(3, 3)
+                torque[1] = float(np.arccos(np.clip(-rot[2, 2], -1.0, 1.0)))
+            return False
 
         def lifting(k):
             velocities.append(d.qvel[self.carriage_dofs].copy())
             return hold_at + np.array([0.0, 0.0, lift]) * _min_jerk((k + 1) / steps)
 
-        self._run(steps, lifting)
-        self._run(int(hold / dt), hold_at + np.array([0.0, 0.0, lift]))
+        self._run(steps, lifting, until=watch)
+        self._run(int(hold / dt), hold_at + np.array([0.0, 0.0, lift]), until=watch)
         acc = np.linalg.norm(np.diff(np.array(velocities), axis=0), axis=1) / dt if len(velocities) > 1 else [0.0]
         return RigResult(
             sealed=sealed, held=self.cup.sealed == self.object,
             lifted=bool(d.xipos[self.object][2] - z0 > 0.5 * lift), leak_area=leak, vacuum=vacuum,
             compression=compression, tilt=tilt, gaps=gaps, peak_acceleration=float(np.max(acc)),
+            peak_gravity_torque=torque[0], tilt_hanging=torque[1],
         )
 
 

@@ -111,44 +111,62 @@ def _time_fast_vs_reference(
 
 
 def bench_episode(*, object_key: str, episodes: int, cores: int, seed: int) -> dict[str, Any]:
-    """Full pick episodes per second (observation rendering included), the simulated-time / wall-
-    time ratio, and render time per depth frame; the reference is real time (ratio 1)."""
+    """Full pick episodes per second (observation rendering included) with the compliant, leak-aware
+    cup, timed against the rigid reference cup (`SimCupConfig.rigid()`) on the same seeds in the
+    same run: wall time per episode of each and their ratio, the simulated-time / wall-time ratio,
+    render time per depth frame, success rates, and the cup's peak accelerations in the lift and the
+    transport (the inertial load of the labeller's disturbing wrench)."""
     from suctionbench.sensing.camera import DepthRenderer
+    from suctionbench.sim.cup import SimCupConfig
     from suctionbench.sim.pick import PickRequest, PickRunner
 
     if episodes < 1:
         raise InputError(f"--episodes {episodes}: must be at least 1")
     used_cores = _limit_cores(cores)
-    start = time.perf_counter()
-    runner = PickRunner(PickRequest(object_key, seed=seed))
-    build_s = time.perf_counter() - start
-    renderer = DepthRenderer(runner.scene.model, runner.intrinsics)
-    try:
-        walls, sims, renders, successes = [], [], [], 0
-        for k in range(episodes):
-            runner.request.seed = seed + k
-            wall = time.perf_counter()
-            runner.episode.reset(np.random.default_rng((seed + k, 0)))
-            t = time.perf_counter()
-            renderer.render(runner.episode.data, runner.scene.camera)
-            renders.append(time.perf_counter() - t)
-            result = runner.run_after_reset()
-            walls.append(time.perf_counter() - wall)
-            sims.append(result["sim_time"] + result.get("placement_time", 0.0))
-            successes += bool(result["success"])
-    finally:
-        renderer.close()
+    runs: dict[str, dict[str, Any]] = {}
+    for name, sim_cup in (("compliant", SimCupConfig()), ("rigid", SimCupConfig.rigid())):
+        start = time.perf_counter()
+        runner = PickRunner(PickRequest(object_key, seed=seed, sim_cup=sim_cup))
+        build_s = time.perf_counter() - start
+        renderer = DepthRenderer(runner.scene.model, runner.intrinsics)
+        walls, sims, renders, successes, accel = [], [], [], 0, {"lift": [], "transport": []}
+        try:
+            for k in range(episodes):
+                runner.request.seed = seed + k
+                wall = time.perf_counter()
+                runner.episode.reset(np.random.default_rng((seed + k, 0)))
+                t = time.perf_counter()
+                renderer.render(runner.episode.data, runner.scene.camera)
+                renders.append(time.perf_counter() - t)
+                result = runner.run_after_reset()
+                walls.append(time.perf_counter() - wall)
+                sims.append(result["sim_time"] + result.get("placement_time", 0.0))
+                successes += bool(result["success"])
+                for motion, value in result.get("peak_acceleration", {}).items():
+                    accel.setdefault(motion, []).append(value)
+        finally:
+            renderer.close()
+        runs[name] = {"build_s": build_s, "walls": walls, "sims": sims, "renders": renders,
+                      "successes": successes, "accel": accel}
+    compliant, rigid = runs["compliant"], runs["rigid"]
+    mean_c, mean_r = float(np.mean(compliant["walls"])), float(np.mean(rigid["walls"]))
+    accel = compliant["accel"]
     return {
         "object": object_key,
         "cores": used_cores,
         "episodes": episodes,
-        "scene_build_s": round(build_s, 3),
-        "episode_wall_s_mean": round(float(np.mean(walls)), 4),
-        "episode_wall_s_max": round(float(np.max(walls)), 4),
-        "episodes_per_s": round(1.0 / float(np.mean(walls)), 2),
-        "sim_to_wall_ratio": round(float(np.sum(sims) / np.sum(walls)), 2),
-        "render_ms_per_frame": round(1e3 * float(np.median(renders)), 2),
-        "success_rate": round(successes / episodes, 3),
+        "scene_build_s": round(compliant["build_s"], 3),
+        "episode_wall_s_mean": round(mean_c, 4),
+        "episode_wall_s_max": round(float(np.max(compliant["walls"])), 4),
+        "episodes_per_s": round(1.0 / mean_c, 2),
+        "rigid_episode_wall_s_mean": round(mean_r, 4),
+        "compliant_over_rigid": round(mean_c / mean_r, 3),
+        "sim_to_wall_ratio": round(float(np.sum(compliant["sims"]) / np.sum(compliant["walls"])), 2),
+        "render_ms_per_frame": round(1e3 * float(np.median(compliant["renders"] + rigid["renders"])), 2),
+        "success_rate": round(compliant["successes"] / episodes, 3),
+        "rigid_success_rate": round(rigid["successes"] / episodes, 3),
+        "peak_acceleration_lift": round(max(accel["lift"]), 3) if accel["lift"] else None,
+        "peak_acceleration_transport": round(max(accel["transport"]), 3) if accel["transport"] else None,
     }
 
 

@@ -205,6 +205,7 @@ class CupHandles:
     """Names of the cup's MuJoCo elements and the configurations they were built from."""
 
     tip_site: str
+    tool_body: str
     actuators: tuple[str, ...]
     slide_joint: str
     lip_geoms: tuple[str, ...]
@@ -294,7 +295,8 @@ def add_suction_tool(
         spec.add_actuator(name=f"{prefix}_vacuum", target=f"{prefix}_lip", gainprm=[cup.vacuum_force] + [0] * 9,
                           **vacuum)
         return CupHandles(
-            tip_site=f"{prefix}_tip", actuators=(f"{prefix}_vacuum",), slide_joint=f"{prefix}_compress",
+            tip_site=f"{prefix}_tip", tool_body=f"{prefix}_tool", actuators=(f"{prefix}_vacuum",),
+            slide_joint=f"{prefix}_compress",
             lip_geoms=tuple(names), lip_joints=(), bellow_body=f"{prefix}_bellow", cup=cup, sim=sim,
         )
     # The compliant lip: n points, each on its own slide along the axis, folding back (q < 0) by up
@@ -342,9 +344,9 @@ def add_suction_tool(
         gainprm=[-cup.vacuum_force] + [0] * 9, **{**vacuum, "trntype": mujoco.mjtTrn.mjTRN_JOINT},
     )
     return CupHandles(
-        tip_site=f"{prefix}_tip", actuators=(f"{prefix}_vacuum", f"{prefix}_vacuum_bellows"),
-        slide_joint=f"{prefix}_compress", lip_geoms=tuple(names), lip_joints=tuple(joints),
-        bellow_body=f"{prefix}_bellow", cup=cup, sim=sim,
+        tip_site=f"{prefix}_tip", tool_body=f"{prefix}_tool",
+        actuators=(f"{prefix}_vacuum", f"{prefix}_vacuum_bellows"), slide_joint=f"{prefix}_compress",
+        lip_geoms=tuple(names), lip_joints=tuple(joints), bellow_body=f"{prefix}_bellow", cup=cup, sim=sim,
     )
 
 

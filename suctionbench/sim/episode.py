@@ -119,6 +119,10 @@ class EpisodeResult:
     wall_time: float
     detail: str | None = None
     phases: dict[str, float] = field(default_factory=dict)
+    peak_acceleration: dict[str, float] = field(default_factory=dict)
+    """Largest acceleration (m/s^2) of the cup (the rigid tool body on the flange) in each motion
+    that carries the object ("lift", "transport"), from its position at the sim rate (second
+    differences over one 2 ms step)."""
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -161,6 +165,10 @@ class PickEpisode:
         self.tip = self.model.site(scene.cup.tip_site).id
         self._is_robot = self._robot_geoms()
         self.trajectory: list[np.ndarray] = []
+        self.tool = self.model.body(scene.cup.tool_body).id
+        self._motion: str | None = None
+        """The motion whose cup positions are being recorded (peak acceleration), None: none."""
+        self._tool_path: dict[str, list[np.ndarray]] = {}
         self.watch_collisions = False
         self.recorder = None
         """Optional callable(data, controller) called every `record_every` steps (run logs)."""
@@ -236,6 +244,8 @@ class PickEpisode:
         if self.watch_collisions:
             self._check_robot_collision()
         self.trajectory.append(self.data.qpos[self.arm_qpos].copy())
+        if self._motion is not None:
+            self._tool_path[self._motion].append(self.data.xpos[self.tool].copy())
         if self.recorder is not None and len(self.trajectory) % self.record_every == 0:
             self.recorder(self.data, self.cup)
         return sealed
@@ -260,6 +270,26 @@ class PickEpisode:
             sealed = self._step(q)
             if watch is not None and watch(sealed):
                 return
+
+    def _peak_accelerations(self) -> dict[str, float]:
+        """Largest |second difference| / dt^2 of the recorded cup path of each motion."""
+        dt, out = self.model.opt.timestep, {}
+        for motion, path in self._tool_path.items():
+            x = np.asarray(path)
+            if len(x) >= 3:
+                out[motion] = round(float(np.linalg.norm(x[2:] - 2.0 * x[1:-1] + x[:-2], axis=1).max() / dt**2), 3)
+        return out
+
+    def _tip_at(self, q: np.ndarray) -> np.ndarray:
+        """Where the arm configuration `q` puts the tool tip with the cup unloaded (the IK model)."""
+        d = self.data_ik
+        saved = d.qpos.copy()
+        d.qpos[self.arm_qpos] = q
+        mujoco.mj_kinematics(self.model, d)
+        tip = d.site_xpos[self.tip].copy()
+        d.qpos[:] = saved
+        mujoco.mj_kinematics(self.model, d)
+        return tip
 
     def _duration(self, waypoints: np.ndarray, minimum: float) -> float:
         """Shortest min-jerk duration keeping every joint under its scaled speed limit.
@@ -293,6 +323,7 @@ class PickEpisode:
         c, d = self.config, self.data
         start_wall, start_sim = time.perf_counter(), d.time
         phases: dict[str, float] = {}
+        self._tool_path = {}
         seal_time, peak_slip, lifted, in_bin = None, 0.0, False, False
         failure, valid, detail = None, True, None
         point, approach = np.asarray(point, float), np.asarray(approach, float) / np.linalg.norm(approach)
@@ -321,9 +352,14 @@ class PickEpisode:
             seal_time = d.time - start_sim
             grip = self._object_in_tip_frame()
 
-            tip_now = d.site_xpos[self.tip].copy()
+            # The lift starts where the arm is: from the commanded tip at q_contact (the IK model's
+            # unloaded cup), not from the loaded cup's tip, which the bellows has moved by its
+            # compression (a step of several mm in the first set point otherwise).
+            tip_now = self._tip_at(q_contact)
             path_up = self._line(tip_now, tip_now + (lift_end - point), approach, q_contact)
+            self._motion, self._tool_path["lift"] = "lift", []
             lost = self._follow_holding(path_up, c.lift_height / c.lift_speed, grip)
+            self._motion = None
             peak_slip = max(peak_slip, lost[1])
             if lost[0]:
                 raise _Failure("seal_lost_lift")
@@ -334,7 +370,9 @@ class PickEpisode:
             q_up = d.qpos[self.arm_qpos].copy()
             q_bin = self._ik(above_bin, np.array([0.0, 0.0, -1.0]), q_up)
             transport = np.array([q_up, q_bin])
+            self._motion, self._tool_path["transport"] = "transport", []
             lost = self._follow_holding(transport, self._duration(transport, 0.8), grip)
+            self._motion = None
             peak_slip = max(peak_slip, lost[1])
             if lost[0]:
                 raise _Failure("seal_lost_transport")
@@ -348,13 +386,16 @@ class PickEpisode:
             self._run(np.array([q_bin, q_bin]), c.release_time)
         except _Failure as exc:
             failure = str(exc)
+            self._motion = None
         except _Unstable as exc:
             failure, valid, detail = "unstable", False, str(exc)
+            self._motion = None
         success = bool(valid and failure is None and lifted and in_bin)
         return EpisodeResult(
             success=success, failure=failure, valid=valid, seal_time=seal_time, peak_slip=peak_slip,
             lifted=lifted, in_bin=in_bin, sim_time=d.time - start_sim,
             wall_time=time.perf_counter() - start_wall, detail=detail, phases=phases,
+            peak_acceleration=self._peak_accelerations(),
         )
 
     # -- observations of the state ----------------------------------------------------------------

@@ -20,6 +20,7 @@ from suctionbench.objects.build import ObjectRecord
 from suctionbench.objects.registry import load_object
 from suctionbench.policies.base import NoGraspError
 from suctionbench.sensing.camera import CameraPoseConfig, resolve_camera, sample_camera_pose
+from suctionbench.sim.cup import SIM_CUP_DEFAULT, SimCupConfig
 from suctionbench.sim.episode import EpisodeConfig, EpisodeResult, PickEpisode
 from suctionbench.sim.scene import SceneConfig, build_scene
 
@@ -65,6 +66,10 @@ class PickRequest:
     episode: EpisodeConfig = field(default_factory=EpisodeConfig)
     """Timing and geometry of the pick."""
 
+    sim_cup: SimCupConfig = SIM_CUP_DEFAULT
+    """What the simulation adds to the cup: the compliant, leak-aware cup (default) or
+    `SimCupConfig.rigid()`, the speed reference of `bench episode`."""
+
     record: ObjectRecord | None = None
     """An object record to use instead of looking up `object_key` (e.g. a freshly built one)."""
 
@@ -105,7 +110,7 @@ class PickRunner:
         rng = np.random.default_rng((request.seed, 1))
         centre = np.array([*SceneConfig().workspace_centre, 0.0])
         self.camera_pose = sample_camera_pose(rng, centre, CameraPoseConfig().for_camera(self.intrinsics))
-        self.scene = build_scene(self.record, request.cup, self.intrinsics, self.camera_pose)
+        self.scene = build_scene(self.record, request.cup, self.intrinsics, self.camera_pose, sim_cup=request.sim_cup)
         self.episode = PickEpisode(self.scene, request.episode)
         self.mesh = self.record.mesh()
         """The object's surface mesh in its own frame (loaded once; posed copies per episode)."""
@@ -303,7 +308,7 @@ class PickRunner:
                 "object": _pose(d.xpos[body], d.xmat[body]),
             })
             log.log_joint_states(now, joints, d.qpos[adr].tolist())
-            log.log_suction(now, bool(d.ctrl[cup.actuator] > 0), cup.sealed >= 0, cup.compression(d))
+            log.log_suction(now, cup.vacuum_on(d), cup.sealed >= 0, cup.compression(d))
 
         self.episode.recorder = record
 

@@ -6,8 +6,9 @@ V = 60 kPa x pi (6.5 mm)^2 = 7.96 N, bellows 1500 N/m over a 6 mm stroke (tiltin
 atan(stroke / 2r) = 21.8 deg), lip travel 2 mm, seal gap 0.3 mm, leak threshold ~1.0 mm^2 (the leak
 at which the ejector's vacuum falls to its 50 % switch point), vacuum time constant 30 ms.
 
-All of it runs in well under a second per test, so none is marked slow. The rig runs the episode's grasp: a guarded approach along the cup axis until the bellows is
-compressed by 4 mm, 0.15 s of vacuum, a 10 cm minimum-jerk lift in 1 s, a 0.5 s hold.
+The rig runs the episode's grasp: a guarded approach along the cup axis until the bellows is
+compressed by 4 mm, 0.15 s of vacuum, a 10 cm minimum-jerk lift in 1 s, a 0.5 s hold. Each test
+runs in well under a second, so none is marked slow.
 """
 
 from __future__ import annotations

@@ -181,6 +181,10 @@ def test_corpus_is_disjoint_from_the_evaluation_sets(tmp_path):
     manifest = json.loads((tmp_path / "corpus.json").read_text())
     corpus_hashes = {o["geometry_hash"] for o in manifest["objects"]}
     assert len(eval_hashes) == sum(SIZES.values()) and not corpus_hashes & eval_hashes
+    from suctionbench.objects.registry import resolve_objects
+
+    for record in resolve_objects(str(tmp_path)):  # named materials, under the cup's mass cap
+        assert MIN_MASS <= record.mass <= MASS_CAP and record.mass_source, record.name
     again = generate_corpus(24, seed=3, out=tmp_path)  # cached: nothing rebuilt, same manifest
     assert again["cached"] == 24 and json.loads((tmp_path / "corpus.json").read_text()) == manifest
 

@@ -70,6 +70,8 @@ def objects_build(
     set_name: Annotated[str | None, typer.Option("--set", help="Only this evaluation set.")] = None,
     out: Annotated[Path | None, typer.Option(help="Root to build into (default: the shipped assets).")] = None,
     workers: Annotated[int, typer.Option(help="Parallel processes.")] = 2,
+    reuse_parts: Annotated[bool, typer.Option(
+        help="Keep the convex parts of objects whose mesh is unchanged (mass-only rebuilds skip CoACD).")] = False,
     as_json: JsonOpt = False,
 ) -> None:
     """Regenerate evaluation-set objects (meshes, stable poses, convex parts) deterministically."""
@@ -84,7 +86,8 @@ def objects_build(
         specs = [s for name, group in sets.items() if set_name in (None, name) for s in group]
         start = time.perf_counter()
         with progress_bar(len(specs), "building", not as_json) as advance:
-            records = build_specs(specs, out or assets_root(), workers=workers, progress=advance)
+            records = build_specs(specs, out or assets_root(), workers=workers, reuse_parts=reuse_parts,
+                                  progress=advance)
         rows = [record_row(r) for r in records]
         if not as_json:
             print_rows("built", rows)

@@ -22,6 +22,7 @@ import manifold3d as m3d
 import numpy as np
 import trimesh
 
+from suctionbench.objects.mass import printed
 from suctionbench.objects.shapes import generator
 from suctionbench.objects.spec import ObjectSpec
 
@@ -318,7 +319,9 @@ def torus_knot_clearance(p: int, q: int, major_radius: float, minor_radius: floa
 
 
 def _adversarial(name: str, generator_name: str, description: str, **params) -> ObjectSpec:
-    return ObjectSpec(name=name, set="adversarial", generator=generator_name, params=params, description=description)
+    """A spec of the adversarial set: a PLA print at the default skin and infill (objects.mass.printed)."""
+    return ObjectSpec(name=name, set="adversarial", generator=generator_name, params=params, description=description,
+                      mass=printed())
 
 
 ADVERSARIAL_SPECS: list[ObjectSpec] = [

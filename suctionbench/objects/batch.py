@@ -10,11 +10,12 @@ from suctionbench.objects.spec import ObjectSpec
 from suctionbench.parallel import process_pool
 
 
-def _build_one(args: tuple[ObjectSpec, Path, bool]) -> ObjectRecord:
+def _build_one(args: tuple[ObjectSpec, Path, bool, bool]) -> ObjectRecord:
     from suctionbench.objects.shapes import make_shape
 
-    spec, out_dir, decompose = args
-    return build_object(make_shape(spec.generator, spec.params), spec, out_dir, decompose=decompose)
+    spec, out_dir, decompose, reuse_parts = args
+    return build_object(make_shape(spec.generator, spec.params), spec, out_dir, decompose=decompose,
+                        reuse_parts=reuse_parts)
 
 
 def build_specs(
@@ -23,10 +24,12 @@ def build_specs(
     *,
     workers: int = 1,
     decompose: bool = True,
+    reuse_parts: bool = False,
     progress: Callable[[int], None] | None = None,
 ) -> list[ObjectRecord]:
-    """Build every spec into root/<set>/<name>/ and return the records in spec order."""
-    jobs = [(spec, Path(root) / spec.set / spec.name, decompose) for spec in specs]
+    """Build every spec into root/<set>/<name>/ and return the records in spec order (`reuse_parts`:
+    keep the convex parts of objects whose mesh is unchanged, see build_object)."""
+    jobs = [(spec, Path(root) / spec.set / spec.name, decompose, reuse_parts) for spec in specs]
     records: list[ObjectRecord] = []
     if workers <= 1:
         for job in jobs:

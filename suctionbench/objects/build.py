@@ -25,17 +25,20 @@ from suctionbench.config import CUP_DEFAULT
 from suctionbench.errors import InputError
 from suctionbench.geometry.mesh import mesh_scale, validate_mesh
 from suctionbench.objects.decompose import CoacdFailed, run_coacd
+from suctionbench.objects.mass import MassModel, MassProperties, mass_properties, over_cap_message, resolve_mass
 from suctionbench.objects.spec import ObjectSpec
 
 MAX_FACES = 6000
 """Surface meshes above this many faces are decimated (quadric decimation) before anything else."""
 
-MASS_CAP = 0.8 * CUP_DEFAULT.payload_kg
-"""Masses from density are capped at 80 % of the default cup's payload (0.72 kg): the benchmark
-is about where to grasp, and an object no cup position can lift tests nothing."""
+MASS_CAP = CUP_DEFAULT.mass_cap_kg
+"""Heaviest object (kg) the default cup carries: V / (S (g + a_peak)) = 0.411 kg (CupConfig.mass_cap_kg,
+objects.mass.mass_cap). Building an object above it is an InputError; objects whose real item is
+heavier are modelled as its lighter real variant (see each object's description)."""
 
 MIN_MASS = 0.005
-"""Lightest object mass (kg), so that no simulated object is a feather."""
+"""Lightest object mass (kg), so that no simulated object is a feather: a lighter mass model (a tiny
+print) is scaled up to it, and its mass_source says so."""
 
 COACD_SCHEDULE = ((0.05, 24), (0.03, 48), (0.02, 64))
 """(concavity threshold, max parts) tried in turn until the parts' union exceeds the object's
@@ -81,6 +84,10 @@ class ObjectRecord:
     stable_poses: list[dict[str, Any]]
     parts: list[str]
     decomposition: dict[str, Any] = field(default_factory=dict)
+    mass_source: str = ""
+    """What the mass is and where its numbers come from (objects.mass)."""
+    mass_model: dict[str, Any] = field(default_factory=dict)
+    """The mass model's components (objects.mass.MassModel.to_dict); empty for a mass given directly."""
     directory: Path | None = None
 
     @property
@@ -141,14 +148,18 @@ def prepare_mesh(mesh: trimesh.Trimesh, source: str) -> trimesh.Trimesh:
 
 
 def stable_poses(mesh: trimesh.Trimesh, com: np.ndarray) -> list[dict[str, Any]]:
-    """Quasi-static stable resting poses (Goldberg et al.) with probabilities, most probable first."""
+    """Quasi-static stable resting poses (Goldberg et al.) with probabilities, most probable first.
+
+    Poses of equal (rounded) probability - a symmetric object's faces - are ordered by their rounded
+    transform, so the order does not depend on the order the hull's faces come out in."""
     transforms, probs = trimesh.poses.compute_stable_poses(mesh, center_mass=com, sigma=0.0, n_samples=1)
-    order = np.argsort(-probs)
-    kept = [i for i in order if probs[i] >= MIN_POSE_PROBABILITY][:MAX_STABLE_POSES] or [order[0]]
-    return [
-        {"probability": round(float(probs[i]), 6), "transform": np.round(transforms[i], 9).tolist()}
-        for i in kept
-    ]
+    poses = [
+        {"probability": round(float(p), 6) + 0.0, "transform": (np.round(t, 9) + 0.0).tolist()}
+        for t, p in zip(transforms, probs, strict=True)
+    ]  # + 0.0 turns -0.0 into 0.0
+    poses.sort(key=lambda pose: (-pose["probability"], np.ravel(pose["transform"]).tolist()))
+    kept = [pose for pose in poses if pose["probability"] >= MIN_POSE_PROBABILITY][:MAX_STABLE_POSES]
+    return kept or poses[:1]
 
 
 def convex_parts(
@@ -211,19 +222,17 @@ def build_object(
     mass: float | None = None,
     decompose: bool = True,
     coacd: tuple[tuple[tuple[float, int], ...], dict] | None = None,
+    reuse_parts: bool = False,
 ) -> ObjectRecord:
     """Build an object directory at `out_dir` (replaced atomically) and return its record.
 
     `coacd`: (schedule, options) for the convex decomposition instead of COACD_SCHEDULE and CoACD's
-    defaults (see `decompose_mesh`)."""
+    defaults (see `decompose_mesh`). `reuse_parts`: where `out_dir` already holds this very mesh (same
+    geometry hash) with its convex parts, keep those parts instead of running CoACD again (a rebuild
+    that changes only masses; CoACD is deterministic, so a full rebuild gives the same parts)."""
     mesh = prepare_mesh(mesh, source=source if source != "generated" else spec.name)
-    com = np.asarray(mesh.center_mass, dtype=float)
-    if mass is None:
-        mass = float(np.clip(spec.density * mesh.volume, MIN_MASS, MASS_CAP))
-    elif not (np.isfinite(mass) and mass > 0):
-        raise InputError(f"mass {mass!r}: must be a positive number of kilograms")
-    mesh.density = mass / mesh.volume
-    inertia = np.asarray(mesh.moment_inertia, dtype=float)
+    model, props = object_mass(mesh, spec, mass)
+    mesh.density = props.mass / mesh.volume
     record = ObjectRecord(
         name=spec.name,
         set=spec.set,
@@ -234,21 +243,27 @@ def build_object(
         units=units,
         scale=mesh_scale(units, scale),
         density=round(mesh.density, 6),
-        mass=round(mass, 9),
-        com=np.round(com, 9).tolist(),
-        inertia=np.round(inertia, 12).tolist(),
+        mass=round(props.mass, 9),
+        com=(np.round(props.com, 9) + 0.0).tolist(),
+        inertia=(np.round(props.inertia, 12) + 0.0).tolist(),
         friction=spec.friction,
         volume=round(float(mesh.volume), 12),
         watertight=True,
         faces=len(mesh.faces),
         extents=np.round(mesh.extents, 9).tolist(),
         geometry_hash=geometry_hash(mesh),
-        stable_poses=stable_poses(mesh, com),
+        stable_poses=stable_poses(mesh, props.com),
         parts=[],
+        mass_source=model.source,
+        mass_model=model.to_dict() if mass is None else {},
     )
-    if decompose:  # before any folder exists: a failure leaves nothing behind
+    kept = _reusable_parts(Path(out_dir), record.geometry_hash) if decompose and reuse_parts else None
+    if kept is not None:
+        part_bytes, record.decomposition = kept
+    elif decompose:  # before any folder exists: a failure leaves nothing behind
         schedule, options = coacd or (COACD_SCHEDULE, None)
         parts, record.decomposition = decompose_mesh(mesh, source, schedule, options)
+        part_bytes = [part.export(file_type="stl") for part in parts]
     out_dir = Path(out_dir)
     try:
         out_dir.parent.mkdir(parents=True, exist_ok=True)
@@ -259,15 +274,49 @@ def build_object(
         mesh.export(tmp / "mesh.stl")
         if decompose:
             (tmp / "parts").mkdir()
-            for i, part in enumerate(parts):
-                part.export(tmp / "parts" / f"part_{i:03d}.stl")
-            record.parts = [f"parts/part_{i:03d}.stl" for i in range(len(parts))]
+            for i, data in enumerate(part_bytes):
+                (tmp / "parts" / f"part_{i:03d}.stl").write_bytes(data)
+            record.parts = [f"parts/part_{i:03d}.stl" for i in range(len(part_bytes))]
         (tmp / "object.toml").write_text(tomli_w.dumps(record.to_toml()))
         _replace_dir(tmp, out_dir)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     record.directory = out_dir
     return record
+
+
+def _reusable_parts(out_dir: Path, geometry: str) -> tuple[list[bytes], dict[str, Any]] | None:
+    """The convex parts (file contents) and decomposition record of the object built at `out_dir`,
+    if it is the same mesh (geometry hash) and all its parts are there; None otherwise."""
+    try:
+        old = ObjectRecord.load(out_dir)
+        if old.geometry_hash != geometry or not old.parts or not old.decomposition:
+            return None
+        return [(out_dir / p).read_bytes() for p in old.parts], old.decomposition
+    except (InputError, TypeError, OSError):
+        return None
+
+
+def object_mass(mesh: trimesh.Trimesh, spec: ObjectSpec, mass: float | None = None) -> tuple[MassModel, MassProperties]:
+    """The mass model an object is built with and its mass properties: a given `mass` (kg) spread
+    uniformly, else the spec's model (objects.mass) or the lightest of its variants under the cap.
+    InputError above the cap (MASS_CAP); a model lighter than MIN_MASS is scaled up to it."""
+    if mass is not None:
+        if not (isinstance(mass, int | float) and np.isfinite(mass) and mass > 0):
+            raise InputError(f"mass {mass!r}: must be a positive number of kilograms")
+        if mass > MASS_CAP:
+            raise InputError(over_cap_message(spec.name, float(mass)))
+        model = MassModel("given with the object (--mass), spread uniformly", density=float(mass) / float(mesh.volume))
+        return model, mass_properties(mesh, model)
+    model, props = resolve_mass(mesh, spec.mass_model(), spec.name, spec.params)
+    if props.mass < MIN_MASS:
+        factor = MIN_MASS / props.mass
+        note = f"; {props.mass * 1000:.2g} g raised to the {MIN_MASS * 1000:g} g floor of simulated objects"
+        props = MassProperties(MIN_MASS, props.com, props.inertia * factor)
+        model = MassModel(model.source + note, density=model.density * factor, shell=model.shell * factor,
+                          contents=model.contents * factor, contents_volume=model.contents_volume,
+                          part=model.part, part_density=model.part_density * factor)
+    return model, props
 
 
 def _replace_dir(new: Path, target: Path) -> None:

@@ -7,7 +7,8 @@ bosses, pockets, holes, brackets) and smooth blobs (free-form curvature). See CO
 
 Spec i of a corpus depends only on (seed, i): its random stream is np.random.default_rng((seed, i)),
 so any slice can be regenerated alone. Every draw is built and checked (watertight, one body,
-2-25 cm, at most MAX_FACES faces); a draw that fails is redrawn from the same stream.
+2-25 cm, at most MAX_FACES faces); a draw that fails is redrawn from the same stream. Masses come
+from named materials (`corpus_mass`) under the same cap as the evaluation sets.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from suctionbench.errors import InputError
 from suctionbench.geometry.mesh import validate_mesh
 from suctionbench.objects.adversarial import radial_sphere, to_trimesh
 from suctionbench.objects.build import MAX_FACES
+from suctionbench.objects.mass import MassModel, printed
 from suctionbench.objects.shapes import GENERATORS, generator, make_shape
 from suctionbench.objects.spec import ObjectSpec
 
@@ -493,7 +495,18 @@ def corpus_spec(seed: int, index: int) -> ObjectSpec:
         generator=gen,
         params=params,
         description=f"training corpus: {category} ({gen})",
+        mass=corpus_mass(gen),
     )
+
+
+def corpus_mass(generator_name: str) -> MassModel:
+    """What a corpus object is made of: a household kind its kind's material (objects.household.
+    HOUSEHOLD_MASS: porcelain mugs, steel wrenches, empty plastic bottles ...), every other shape a
+    PLA print (objects.mass.printed). Both fall back to lighter prints (lower infill) where they
+    would weigh more than the cup's mass cap, so corpus masses obey the evaluation sets' cap."""
+    from suctionbench.objects.household import HOUSEHOLD_MASS
+
+    return HOUSEHOLD_MASS.get(generator_name) or printed()
 
 
 def corpus_specs(count: int, seed: int) -> list[ObjectSpec]:

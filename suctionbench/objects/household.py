@@ -17,6 +17,8 @@ from collections.abc import Sequence
 import numpy as np
 import trimesh
 
+from suctionbench.objects.mass import MassModel, material, part, printed, shell_of, solid
+from suctionbench.objects.sets import CAN_330_ML
 from suctionbench.objects.shapes import (
     box,
     cylinder,
@@ -28,7 +30,7 @@ from suctionbench.objects.shapes import (
     tube,
     union,
 )
-from suctionbench.objects.spec import DEFAULT_DENSITY, ObjectSpec
+from suctionbench.objects.spec import ObjectSpec
 
 # -- shared building blocks ----------------------------------------------------------------------
 
@@ -305,6 +307,33 @@ def hammer(
     """Claw hammer: oval handle along z, cylindrical head along x (striking poll on -x), and a
     tapered, drooping claw on +x split by a V-slot."""
     handle = placed(_rounded_box((handle_width, handle_depth, handle_length), 0.35), (0.0, 0.0, handle_length / 2.0))
+    return union(handle, *_hammer_head_pieces(handle_length, head_radius, poll_length, claw_length, claw_droop,
+                                              slot_width, sections))
+
+
+@part("household_hammer.head")
+def hammer_head(
+    handle_length: float = 0.2,
+    handle_width: float = 0.028,
+    handle_depth: float = 0.02,
+    head_radius: float = 0.013,
+    poll_length: float = 0.045,
+    claw_length: float = 0.06,
+    claw_droop: float = 0.25,
+    slot_width: float = 0.005,
+    sections: int = 32,
+) -> trimesh.Trimesh:
+    """The hammer's steel head: the cylindrical poll and the claw (the handle's end inside it
+    included, as a wedged handle fills the eye)."""
+    return union(*_hammer_head_pieces(handle_length, head_radius, poll_length, claw_length, claw_droop, slot_width,
+                                      sections))
+
+
+def _hammer_head_pieces(
+    handle_length: float, head_radius: float, poll_length: float, claw_length: float, claw_droop: float,
+    slot_width: float, sections: int,
+) -> tuple[trimesh.Trimesh, trimesh.Trimesh]:
+    """The hammer head's poll cylinder and its claw."""
     head_z = handle_length - 0.5 * head_radius
     head = _rod(head_radius, (-poll_length, 0.0, head_z), (0.5 * head_radius, 0.0, head_z), sections)
     claw = box([claw_length, 1.8 * head_radius, 1.5 * head_radius])
@@ -312,7 +341,7 @@ def hammer(
     slot = _tapered(box([0.7 * claw_length, 0.3 * slot_width, 4.0 * head_radius]), 0, (1.0 / 0.3, 1.0))
     claw = difference(claw, placed(slot, (0.35 * claw_length, 0.0, 0.0)))
     claw = placed(placed(claw, (claw_length / 2.0, 0.0, 0.0)), (0.0, 0.0, head_z), rotation=(0.0, claw_droop, 0.0))
-    return union(handle, head, claw)
+    return head, claw
 
 
 @generator("household_screwdriver")
@@ -342,11 +371,35 @@ def screwdriver(
     flat = placed(flat, (handle_radius - flat_depth + 0.01, 0.0, 0.42 * handle_length))
     cutters = [placed(flat, rotation=(0.0, 0.0, a)) for a in 2.0 * math.pi * np.arange(flats) / flats]
     handle = difference(handle, *cutters) if flats else handle
+    shaft, blade = _screwdriver_shaft_pieces(handle_length, shaft_radius, shaft_length, tip_width, tip_thickness)
+    return union(handle, shaft, blade)
+
+
+@part("household_screwdriver.shaft")
+def screwdriver_shaft(
+    handle_length: float = 0.11,
+    handle_radius: float = 0.018,
+    flats: int = 5,
+    flat_depth: float = 0.004,
+    shaft_radius: float = 0.003,
+    shaft_length: float = 0.1,
+    tip_width: float = 0.006,
+    tip_thickness: float = 0.0012,
+    sections: int = 36,
+) -> trimesh.Trimesh:
+    """The screwdriver's steel shaft and blade (with the 1 cm of shaft set into the handle)."""
+    return union(*_screwdriver_shaft_pieces(handle_length, shaft_radius, shaft_length, tip_width, tip_thickness))
+
+
+def _screwdriver_shaft_pieces(
+    handle_length: float, shaft_radius: float, shaft_length: float, tip_width: float, tip_thickness: float
+) -> tuple[trimesh.Trimesh, trimesh.Trimesh]:
+    """The screwdriver's round shaft and its flat blade."""
     top = handle_length + shaft_length
     shaft = _rod(shaft_radius, (0.0, 0.0, handle_length - 0.01), (0.0, 0.0, top), 24)
     blade = _tapered(box([tip_width, 2.0 * shaft_radius, 0.012]), 2, (1.0, tip_thickness / (2.0 * shaft_radius)))
     blade = placed(blade, (0.0, 0.0, top))
-    return union(handle, shaft, blade)
+    return shaft, blade
 
 
 @generator("household_wrench")
@@ -525,97 +578,187 @@ def can(
 # -- the typical set -----------------------------------------------------------------------------
 
 
-def _typical(name: str, gen: str, description: str, density: float = DEFAULT_DENSITY, **params) -> ObjectSpec:
+def _typical(name: str, gen: str, description: str, mass: MassModel, **params) -> ObjectSpec:
     """A spec of the typical set."""
-    return ObjectSpec(name=name, set="typical", generator=gen, params=params, density=density, description=description)
+    return ObjectSpec(name=name, set="typical", generator=gen, params=params, mass=mass, description=description)
 
+
+def _container(what: str, wall_material: str, wall: float, contents: str | None = None, litres: float = 0.0):
+    """A bottle, jar or jug: a `wall`-thick shell of `wall_material`, holding `litres` of `contents`
+    filled from the bottom (upright; the level follows from the shape)."""
+    text = f"{what}: {wall * 1000:g} mm walls of {material(wall_material).source}"
+    if contents is None:
+        return MassModel(text, shell=shell_of(wall_material, wall))
+    liquid = material(contents)
+    return MassModel(
+        f"{text}; {litres * 1000:g} ml of {liquid.source} filled from the bottom",
+        shell=shell_of(wall_material, wall), contents=litres * 1e-3 * liquid.density, contents_volume=litres * 1e-3,
+    )
+
+
+PORCELAIN = solid("porcelain", "glazed tableware")
 
 TYPICAL_SPECS: list[ObjectSpec] = [
-    _typical("mug_classic", "household_mug", "Straight 8 cm coffee mug with a round C handle."),
+    _typical("mug_classic", "household_mug", "Straight 8 cm porcelain coffee mug with a round C handle.", PORCELAIN),
     _typical(
-        "mug_tall", "household_mug", "Tall latte mug flaring towards the rim, with a long flat handle.",
+        "mug_tall", "household_mug", "Tall porcelain latte mug flaring towards the rim, with a long flat handle.",
+        PORCELAIN,
         radius=0.042, bottom_radius=0.034, height=0.12, handle_radius=0.034, handle_width=0.016, handle_offset=0.012,
     ),
     _typical(
-        "mug_espresso", "household_mug", "Small thick-walled espresso cup with a small handle.",
+        "mug_espresso", "household_mug", "Small thick-walled porcelain espresso cup with a small handle.", PORCELAIN,
         radius=0.03, bottom_radius=0.025, height=0.06, wall=0.005, floor=0.008,
         handle_radius=0.016, handle_thickness=0.007, handle_width=0.01, handle_offset=0.006,
     ),
     _typical(
-        "bottle_water", "household_bottle", "Half-litre water bottle, pinched waist, small cap (empty).",
+        "bottle_water", "household_bottle",
+        "Half-litre PET water bottle, pinched waist, small cap, empty (full it weighs ~0.52 kg, above the cap).",
+        _container("empty 0.5 l water bottle", "pet", 0.00025),
         radius=0.032, body_height=0.15, shoulder_height=0.04, waist=0.08,
     ),
     _typical(
-        "bottle_wine", "household_bottle", "Slim wine-style bottle with a long neck and a screw cap (empty).",
+        "bottle_wine", "household_bottle",
+        "Slim 375 ml half-bottle of glass with a long neck and a screw cap, empty (a full 0.75 l wine bottle, "
+        "~1.2 kg, is far above the cup's mass cap).",
+        _container("empty glass half-bottle", "glass", 0.0025),
         radius=0.036, body_height=0.14, shoulder_height=0.035, neck_radius=0.014, neck_height=0.05,
         cap_radius=0.016, cap_height=0.03,
     ),
     _typical(
-        "bottle_shampoo", "household_bottle", "Flat squared shampoo bottle with a wide flip cap.",
+        "bottle_shampoo", "household_bottle",
+        "Flat squared HDPE shampoo bottle with a wide flip cap, part used: 250 ml left (full, ~0.45 kg, it is "
+        "above the cap).",
+        _container("shampoo bottle", "hdpe", 0.0008, "shampoo", 0.25),
         radius=0.04, body_height=0.13, shoulder_height=0.025, neck_radius=0.014, neck_height=0.012,
         cap_radius=0.02, cap_height=0.025, squareness=5.0, depth_ratio=0.55,
     ),
     _typical(
-        "jar_wide", "household_bottle", "Squat peanut-butter jar: wide body, short neck, large lid.",
+        "jar_wide", "household_bottle",
+        "Squat PET peanut-butter jar: wide body, short neck, large lid; 250 g left (full, ~0.8 kg, it is above "
+        "the cap).",
+        _container("peanut-butter jar", "pet", 0.0006, "peanut_butter", 0.25 / 1.08),
         radius=0.045, body_height=0.08, shoulder_height=0.012, neck_radius=0.038, neck_height=0.012,
         cap_radius=0.041, cap_height=0.02, squareness=2.6,
     ),
-    _typical("spray_bottle_cleaner", "household_spray_bottle", "Trigger spray cleaner with a flat oval body (empty)."),
-    _typical("stapler_desk", "household_stapler", "Desk stapler with its arm closed and slightly lifted at the front."),
-    _typical("jug_detergent", "household_jug", "Laundry-detergent jug with a moulded through-hole handle and a cap."),
     _typical(
-        "jug_milk", "household_jug", "Tall narrow milk-style jug with a rounder body and a small cap.",
+        "spray_bottle_cleaner", "household_spray_bottle",
+        "Trigger spray cleaner with a flat oval HDPE body, half used: 250 ml left (full, ~0.6 kg, it is above the "
+        "cap).",
+        _container("trigger spray bottle", "hdpe", 0.0008, "water", 0.25),
+    ),
+    _typical(
+        "stapler_desk", "household_stapler",
+        "Desk stapler with its arm closed and slightly lifted at the front; pressed-steel shells.",
+        MassModel("pressed-steel stapler: 0.8 mm sheet over the surface (" + material("steel").source + ")",
+                  shell=shell_of("steel", 0.0008)),
+    ),
+    _typical(
+        "jug_detergent", "household_jug",
+        "Laundry-detergent jug with a moulded through-hole handle and a cap, empty (full, ~2 kg, it is far above "
+        "the cap).",
+        _container("empty detergent jug", "hdpe", 0.001),
+    ),
+    _typical(
+        "jug_milk", "household_jug",
+        "Tall narrow HDPE milk jug with a rounder body and a small cap, 250 ml of milk left (full, ~2 kg, it is "
+        "far above the cap).",
+        _container("milk jug", "hdpe", 0.0005, "milk", 0.25),
         width=0.12, depth=0.11, height=0.21, exponent=0.35, top_depth_scale=0.7, hole=[0.035, 0.075],
         grip=0.022, cap_radius=0.018, cap_height=0.02,
     ),
     _typical(
-        "hammer_claw", "household_hammer",
-        "Claw hammer; density 3000 kg/m^3: steel head and wooden handle averaged over the volume.",
-        density=3000.0,
+        "hammer_claw", "household_hammer", "Claw hammer: steel head, hickory handle (head-heavy).",
+        MassModel(
+            "steel head (" + material("steel").source + ") on a hickory handle (" + material("hickory").source + ")",
+            density=material("hickory").density, part="household_hammer.head", part_density=material("steel").density,
+        ),
     ),
-    _typical("screwdriver_flat", "household_screwdriver", "Flat-blade screwdriver with a faceted handle."),
     _typical(
-        "wrench_combination", "household_wrench", "Combination wrench lying flat; solid steel (7850 kg/m^3).",
-        density=7850.0,
+        "screwdriver_flat", "household_screwdriver",
+        "Flat-blade screwdriver with a faceted polypropylene handle and a steel shaft.",
+        MassModel(
+            "polypropylene handle (" + material("pp").source + ") with a steel shaft and blade ("
+            + material("steel").source + ")",
+            density=material("pp").density, part="household_screwdriver.shaft", part_density=material("steel").density,
+        ),
     ),
-    _typical("toy_car", "household_toy_car", "Toy car: rounded body, sloped cabin, four wheels."),
     _typical(
-        "toy_truck", "household_toy_car", "Toy truck: long low body with a tall cab at the front.",
+        "wrench_combination", "household_wrench", "Combination wrench lying flat; solid steel.",
+        solid("steel", "forged wrench"),
+    ),
+    _typical("toy_car", "household_toy_car", "Wooden toy car: rounded body, sloped cabin, four wheels.",
+             solid("beech", "wooden toy")),
+    _typical(
+        "toy_truck", "household_toy_car", "Wooden toy truck: long low body with a tall cab at the front.",
+        solid("beech", "wooden toy"),
         length=0.16, width=0.06, body_height=0.025, cabin_length=0.045, cabin_height=0.035, cabin_offset=0.045,
         windshield_slope=0.85, wheel_radius=0.015, wheel_width=0.012, clearance=0.01,
     ),
     _typical(
-        "blocks_tower", "household_block_stack", "Three toy blocks stacked, each turned against the one below.",
+        "blocks_tower", "household_block_stack", "Three wooden toy blocks stacked, each turned against the one below.",
+        solid("beech", "toy blocks"),
         blocks=[[0.06, 0.06, 0.03], [0.05, 0.04, 0.035], [0.035, 0.035, 0.035]], yaws=[0.0, 0.4, 0.9],
     ),
     _typical(
-        "blocks_steps", "household_block_stack", "Rounded toy bricks stacked off-centre like steps.",
+        "blocks_steps", "household_block_stack", "Rounded wooden toy bricks stacked off-centre like steps.",
+        solid("beech", "toy blocks"),
         blocks=[[0.08, 0.04, 0.025], [0.06, 0.04, 0.025], [0.04, 0.04, 0.025]],
         shifts=[[0.0, 0.0], [0.01, 0.0], [0.02, 0.0]], exponent=0.15,
     ),
-    _typical("bowl_cereal", "household_bowl", "Cereal bowl: spherical shell cut at the rim on a foot ring."),
+    _typical("bowl_cereal", "household_bowl", "Porcelain cereal bowl: spherical shell cut at the rim on a foot ring.",
+             PORCELAIN),
     _typical(
-        "bowl_small", "household_bowl", "Small deep dessert bowl with a thicker wall.",
+        "bowl_small", "household_bowl", "Small deep porcelain dessert bowl with a thicker wall.", PORCELAIN,
         radius=0.05, wall=0.005, depth=0.042, foot_radius=0.022, foot_height=0.006,
     ),
     _typical(
-        "soap_dish", "household_tray", "Soap dish: shallow rounded tray with drainage ribs.",
-        length=0.12, width=0.085, height=0.025, ribs=5,
+        "soap_dish", "household_tray", "Polypropylene soap dish: shallow rounded tray with drainage ribs.",
+        solid("pp", "moulded tray"), length=0.12, width=0.085, height=0.025, ribs=5,
     ),
     _typical(
-        "pencil_tray", "household_tray", "Long desk-organiser tray with straight walls.",
-        length=0.22, width=0.07, height=0.03, wall=0.007, floor=0.005, exponent=0.2,
-    ),
-    _typical("tape_packing", "household_tape_roll", "Roll of 48 mm packing tape lying flat."),
-    _typical(
-        "can_soda", "household_can",
-        "Full 330 ml drink can, necked top, domed bottom; 900 kg/m^3 = 0.35 kg over its 0.39 l envelope.",
-        density=900.0,
+        "pencil_tray", "household_tray", "Long ABS desk-organiser tray with straight walls.",
+        solid("abs", "moulded tray"), length=0.22, width=0.07, height=0.03, wall=0.007, floor=0.005, exponent=0.2,
     ),
     _typical(
-        "can_soup", "household_can", "Full food can with side beads and flush rims; 900 kg/m^3 = 0.4 kg over 0.45 l.",
-        density=900.0, radius=0.037, height=0.11, top_radius=0.0375, neck_height=0.006, foot_radius=0.034,
+        "tape_packing", "household_tape_roll", "Roll of 48 mm packing tape lying flat.",
+        solid("packing_tape", "tape roll (its 3 mm paperboard core, ~700 kg/m^3, counted at the tape's density)"),
+    ),
+    _typical("can_soda", "household_can", "Full 330 ml drink can, necked top, domed bottom.", CAN_330_ML),
+    _typical(
+        "can_soup", "household_can",
+        "Full can of condensed soup (305 g net, a 68 x 102 mm can) with side beads and flush rims; the 400 g "
+        "size (73 x 110 mm, ~0.46 kg) is above the cup's mass cap.",
+        MassModel("full food can: 305 g net weight (the condensed-soup size) filling it + tinplate can, 0.2 mm "
+                  "steel (" + material("steel").source + ")", shell=shell_of("steel", 0.0002), contents=0.305),
+        radius=0.034, height=0.102, top_radius=0.0345, neck_height=0.006, foot_radius=0.031,
         foot_height=0.004, dome=0.002, lid_depth=0.003, rim_width=0.002, beads=4,
     ),
 ]
 """The 25 objects of the typical set: household goods with several flat or gently curved patches."""
+
+
+def _corpus_kind(model: MassModel) -> MassModel:
+    """A household kind's material for corpus draws, falling back to a PLA print of the shape (at
+    the infill that fits) where the real material would exceed the cup's mass cap."""
+    return MassModel(model.source, density=model.density, shell=model.shell, part=model.part,
+                     part_density=model.part_density, lighter=(printed(),))
+
+
+HOUSEHOLD_MASS: dict[str, MassModel] = {
+    "household_mug": _corpus_kind(PORCELAIN),
+    "household_bottle": _corpus_kind(_container("empty bottle", "pet", 0.00025)),
+    "household_spray_bottle": _corpus_kind(_container("empty trigger spray bottle", "hdpe", 0.0008)),
+    "household_stapler": _corpus_kind(next(s.mass for s in TYPICAL_SPECS if s.name == "stapler_desk")),
+    "household_jug": _corpus_kind(_container("empty jug", "hdpe", 0.001)),
+    "household_hammer": _corpus_kind(next(s.mass for s in TYPICAL_SPECS if s.name == "hammer_claw")),
+    "household_screwdriver": _corpus_kind(next(s.mass for s in TYPICAL_SPECS if s.name == "screwdriver_flat")),
+    "household_wrench": _corpus_kind(solid("steel", "forged wrench")),
+    "household_toy_car": _corpus_kind(solid("beech", "wooden toy")),
+    "household_block_stack": _corpus_kind(solid("beech", "toy blocks")),
+    "household_bowl": _corpus_kind(PORCELAIN),
+    "household_tray": _corpus_kind(solid("pp", "moulded tray")),
+    "household_tape_roll": _corpus_kind(solid("packing_tape", "tape roll")),
+    "household_can": _corpus_kind(_container("empty can", "aluminium", 0.00015)),
+}
+"""What each household kind is made of when the training corpus draws it at random sizes: the
+typical set's materials, containers empty (their contents' level would depend on the draw)."""

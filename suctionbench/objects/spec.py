@@ -5,14 +5,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from suctionbench.objects.mass import MassModel, printed
+
 SETS = ("basic", "typical", "adversarial")
 """The evaluation sets, as in the paper (25 + 25 + 5 objects)."""
-
-DEFAULT_DENSITY = 400.0
-"""Effective density (kg/m^3) of household goods and 3D prints: packaged goods and hollow
-containers average well below solid plastic (~1000-1200); PLA prints at 20-30 % infill come to
-~300-450. Objects heavier than the mass cap are capped (see objects.build)."""
-
 
 @dataclass(frozen=True)
 class ObjectSpec:
@@ -30,11 +26,23 @@ class ObjectSpec:
     params: dict[str, Any] = field(default_factory=dict)
     """Keyword parameters of the generator (metres, radians); plain numbers, lists and strings."""
 
-    density: float = DEFAULT_DENSITY
-    """Effective density (kg/m^3) giving the mass from the mesh volume."""
+    density: float | None = None
+    """Uniform density (kg/m^3) giving the mass from the mesh volume, where no `mass` model is given."""
+
+    mass: MassModel | None = None
+    """What the object weighs and why (objects.mass): a real item's contents and packaging, a named
+    material, a print. Without it (and without `density`) an object is taken as a PLA print."""
 
     friction: float = 0.5
     """Coulomb friction coefficient of the object's surface against silicone."""
 
     description: str = ""
     """One line saying what the object is meant to resemble or test."""
+
+    def mass_model(self) -> MassModel:
+        """The object's mass model: `mass`, else a uniform solid of `density`, else a PLA print."""
+        if self.mass is not None:
+            return self.mass
+        if self.density is not None:
+            return MassModel(f"uniform density {self.density:g} kg/m^3 (given)", density=self.density)
+        return printed()

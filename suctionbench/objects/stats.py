@@ -1,5 +1,12 @@
-"""How hard each set is for the analytic labeller: per object, in its most probable stable pose
-(gravity along -z), the share of surface grasps that seal and that are robust."""
+"""How hard each set is for the analytic labeller, and whether each object can be picked at all.
+
+Per object, in its most probable stable pose (gravity along -z): the share of surface grasps that
+seal and that are robust (rwr > 0.2, the training threshold). And its known-state pickability: over
+its stable poses, the share of stable-pose probability in which at least one grasp is robust
+(rwr > PICK_THRESHOLD) and approaches within the policies' cone (APPROACH_CONE from straight down).
+An object with none is flagged (a triangular prism lying on a face offers only faces tilted 60 deg),
+not removed: it measures what no top-down policy can do.
+"""
 
 from __future__ import annotations
 
@@ -8,11 +15,26 @@ from typing import Any
 
 import numpy as np
 
-from suctionbench.config import LabelConfig
+from suctionbench.config import CUP_DEFAULT, LabelConfig
 from suctionbench.contact import SuctionLabeller
 from suctionbench.contact.summary import POSITIVE_THRESHOLD
+from suctionbench.evaluation.runner import PREDICT_THRESHOLD
 from suctionbench.geometry.sampling import sample_surface_grasps
 from suctionbench.objects.build import ObjectRecord
+from suctionbench.objects.mass import mass_cap
+from suctionbench.policies.base import SamplerConfig
+
+PICK_THRESHOLD = PREDICT_THRESHOLD
+"""rwr above which a grasp counts as robust for pickability: the benchmark's (0.5, evaluation.runner),
+where an analytic label predicts a successful pick."""
+
+APPROACH_CONE = SamplerConfig().max_optical_axis_angle
+"""Largest angle (rad) between a grasp's approach and straight down that the image policies (heuristics,
+CEM, GQ-CNN) sample: gqcnn's 30 deg from the optical axis (policies.base.SamplerConfig), taken here
+with the camera looking straight down."""
+
+PICK_BATCH = 64
+"""Grasps labelled at a time per pose; a pose stops at the first batch holding a robust grasp."""
 
 
 def object_label_stats(record: ObjectRecord, grasps: int, seed: int, config: LabelConfig | None = None) -> dict:
@@ -31,16 +53,60 @@ def object_label_stats(record: ObjectRecord, grasps: int, seed: int, config: Lab
     }
 
 
-def set_stats(
-    records: list[ObjectRecord], grasps: int, seed: int, progress: Callable[[int], None] | None = None
+def pickability(
+    record: ObjectRecord, grasps: int, seed: int, config: LabelConfig | None = None,
+    threshold: float = PICK_THRESHOLD, cone: float = APPROACH_CONE,
 ) -> dict[str, Any]:
-    """Per-set summary: counts, faces, parts, mass range, label shares (means over objects)."""
+    """Known-state pickability: per stable pose, whether any of up to `grasps` uniform surface grasps
+    approaching within `cone` of straight down has rwr > `threshold`; and the share of the recorded
+    stable poses' probability that is pickable (labelled with the episode's perturbations, inertial
+    load included, unless `config` says otherwise)."""
+    config = config or LabelConfig.for_episode(CUP_DEFAULT)
+    mesh0 = record.mesh()
+    poses, pickable_mass = [], 0.0
+    for index, pose_data in enumerate(record.stable_poses):
+        pose = np.asarray(pose_data["transform"], dtype=float)
+        mesh = mesh0.copy()
+        mesh.apply_transform(pose)
+        com = pose[:3, :3] @ np.asarray(record.com) + pose[:3, 3]
+        labeller = SuctionLabeller(mesh, config, mass=record.mass, com=com)
+        rng = np.random.default_rng((seed, index))
+        points, approaches = sample_surface_grasps(mesh, 8 * grasps, rng)
+        inside = approaches[:, 2] <= -np.cos(cone)
+        points, approaches = points[inside][:grasps], approaches[inside][:grasps]
+        best, labelled = 0.0, 0
+        for start in range(0, len(points), PICK_BATCH):
+            batch = slice(start, start + PICK_BATCH)
+            rwr = labeller.label(points[batch], approaches[batch], seed + index, metrics=("rwr",)).rwr
+            labelled += len(rwr)
+            best = max(best, float(rwr.max()))
+            if best > threshold:
+                break
+        ok = best > threshold
+        pickable_mass += pose_data["probability"] * ok
+        poses.append({"probability": pose_data["probability"], "in_cone": int(len(points)), "labelled": labelled,
+                      "best_rwr": round(best, 4), "pickable": ok})
+    total = sum(p["probability"] for p in record.stable_poses)
+    share = pickable_mass / total if total > 0 else 0.0
+    return {"pickability": round(share, 4), "unpickable": share == 0.0, "poses": poses}
+
+
+def set_stats(
+    records: list[ObjectRecord], grasps: int, seed: int, progress: Callable[[int], None] | None = None,
+    *, pick: bool = True,
+) -> dict[str, Any]:
+    """Per-set summary: counts, faces, parts, mass range, label shares (means over objects) and, with
+    `pick`, known-state pickability per object, its mean and the objects flagged with none."""
     per_object = []
     for record in records:
-        per_object.append({"key": record.key, **object_label_stats(record, grasps, seed)})
+        row: dict[str, Any] = {"key": record.key, "mass": record.mass, "mass_source": record.mass_source}
+        row.update(object_label_stats(record, grasps, seed))
+        if pick:
+            row.update(pickability(record, grasps, seed))
+        per_object.append(row)
         if progress:
             progress(1)
-    return {
+    summary = {
         "objects": len(records),
         "faces": [min(r.faces for r in records), max(r.faces for r in records)],
         "parts": [min(len(r.parts) for r in records), max(len(r.parts) for r in records)],
@@ -48,5 +114,18 @@ def set_stats(
         "seal_share": round(float(np.mean([o["seal_share"] for o in per_object])), 4),
         "robust_share": round(float(np.mean([o["robust_share"] for o in per_object])), 4),
         "rwr_mean": round(float(np.mean([o["rwr_mean"] for o in per_object])), 4),
-        "per_object": per_object,
+    }
+    if pick:
+        summary["pickability"] = round(float(np.mean([o["pickability"] for o in per_object])), 4)
+        summary["unpickable"] = [o["key"] for o in per_object if o["unpickable"]]
+    summary["per_object"] = per_object
+    return summary
+
+
+def pick_criteria() -> dict[str, Any]:
+    """What pickability counts and the mass cap objects are held to, for reports."""
+    return {
+        "pick_threshold_rwr": PICK_THRESHOLD,
+        "approach_cone_deg": round(float(np.degrees(APPROACH_CONE)), 3),
+        "mass_cap": mass_cap(CUP_DEFAULT),
     }

@@ -1,0 +1,181 @@
+"""Object masses: real items and named materials, the cup's mass cap, centres of mass of filled
+containers and head-heavy tools, composite inertia, and known-state pickability."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import trimesh
+
+from suctionbench.config import CUP_DEFAULT, STANDARD_GRAVITY, CupConfig
+from suctionbench.errors import InputError
+from suctionbench.objects.build import build_object
+from suctionbench.objects.importer import import_mesh
+from suctionbench.objects.mass import (
+    MATERIALS,
+    MassModel,
+    mass_cap,
+    mass_properties,
+    printed,
+    shell_properties,
+    solid,
+)
+from suctionbench.objects.registry import list_objects, load_object
+from suctionbench.objects.spec import SETS, ObjectSpec
+
+ALL = [r for s in SETS for r in list_objects(s)]
+
+
+def test_mass_cap_follows_from_the_cup():
+    # V = 60 kPa x pi (6.5 mm)^2 = 7.96 N; cap = V / (1.5 (9.81 + 3.1)) = 0.411 kg
+    cup = CupConfig()
+    v = 60e3 * math.pi * 0.0065**2
+    assert cup.mass_cap_kg == pytest.approx(v / (1.5 * (STANDARD_GRAVITY + 3.1)), rel=1e-9)
+    cap = mass_cap(cup)
+    assert cap["mass_cap_kg"] == pytest.approx(0.411, abs=5e-4)
+    assert "0.411 kg" in cap["derivation"] and "7.96 N" in cap["derivation"]
+    assert mass_cap(CupConfig(safety_factor=2.0))["mass_cap_kg"] < cap["mass_cap_kg"]
+
+
+@pytest.mark.parametrize("record", ALL, ids=[r.key for r in ALL])
+def test_committed_masses_are_real_and_under_the_cap(record):
+    assert 0.005 <= record.mass <= CUP_DEFAULT.mass_cap_kg
+    assert len(record.mass_source) > 20 and record.mass_model  # a stated source and its components
+    inertia = np.asarray(record.inertia)
+    eig = np.linalg.eigvalsh(inertia)
+    assert np.allclose(inertia, inertia.T) and eig.min() > 0
+    assert eig.max() <= eig.sum() - eig.max() + 1e-12  # triangle inequality of principal moments (MuJoCo)
+
+
+FILLED = ["basic/cylinder_can", "typical/can_soda", "typical/bottle_shampoo", "typical/jar_wide",
+          "typical/spray_bottle_cleaner", "typical/jug_milk"]
+
+
+@pytest.mark.parametrize("key", FILLED)
+def test_part_filled_container_has_its_centre_of_mass_below_the_centroid(key):
+    record = load_object(key)
+    assert record.mass_model.get("contents_volume"), "a part-filled container"
+    centroid = record.mesh().center_mass
+    assert record.com[2] < centroid[2] - 0.005  # liquid below the headspace pulls it > 5 mm down
+
+
+def test_can_centre_of_mass_matches_the_fill_level():
+    # A straight 66 x 120 mm can with 330 ml of drink: the liquid stands h_f = V_f / A tall from the
+    # bottom, its centre at h_f / 2; the thin aluminium wall's centre is the can's centre (z = 0).
+    record = load_object("basic/cylinder_can")
+    mesh = record.mesh()
+    height = mesh.extents[2]
+    area = mesh.volume / height  # the 64-gon's cross-section
+    liquid = record.mass_model["contents"]
+    level = record.mass_model["contents_volume"] / area
+    shell = record.mass - liquid
+    expected = liquid * (-height / 2 + level / 2) / record.mass
+    assert record.com[2] == pytest.approx(expected, abs=2e-4)
+    assert shell == pytest.approx(record.mass_model["shell"] * mesh.area, rel=1e-6)
+    assert record.mass == pytest.approx(0.356, abs=0.005)  # a full 330 ml can weighs ~0.35 kg
+
+
+def test_hammer_is_head_heavy():
+    record = load_object("typical/hammer_claw")
+    mesh = record.mesh()
+    # the steel head sits at the top of the handle (z = 0.2 m): the centre of mass is far above the
+    # centroid of the volume, towards the head
+    assert record.com[2] > mesh.center_mass[2] + 0.03
+    assert record.mass > 7850.0 * 20e-6  # at least 20 cm^3 of steel
+
+
+def test_real_items_weigh_what_they_weigh():
+    assert load_object("basic/cylinder_battery").mass == pytest.approx(0.140, abs=1e-6)
+    assert load_object("basic/cylinder_puck").mass == pytest.approx(0.163, abs=1e-6)
+    assert 0.156 <= load_object("basic/cylinder_puck").mass <= 0.170
+
+
+def test_shell_inertia_matches_a_closed_box_shell():
+    # Thin closed box shell a x b x c of areal density s: I_xx = s [2 b c (b^2 + c^2) / 12
+    # + 2 a c (b^2 / 4 + c^2 / 12) + 2 a b (b^2 / 12 + c^2 / 4)] (faces normal to x, y, z)
+    a, b, c, s = 0.3, 0.2, 0.1, 2.0
+    props = shell_properties(trimesh.creation.box(extents=(a, b, c)), s)
+    ixx = s * (2 * b * c * (b**2 + c**2) / 12 + 2 * a * c * (b**2 / 4 + c**2 / 12) + 2 * a * b * (b**2 / 12 + c**2 / 4))
+    assert props.mass == pytest.approx(s * 2 * (a * b + b * c + a * c))
+    assert props.inertia[0, 0] == pytest.approx(ixx, rel=1e-9)
+    assert np.allclose(props.com, 0.0, atol=1e-12)
+
+
+def test_composite_of_components_is_consistent():
+    # contents filling a box half-way: centre a quarter height below the middle; a part of another
+    # density replaces the solid's inside it
+    box = trimesh.creation.box(extents=(0.1, 0.1, 0.2))
+    half = mass_properties(box, MassModel("test", contents=1.0, contents_volume=0.001))
+    assert half.mass == pytest.approx(1.0) and half.com[2] == pytest.approx(-0.05, abs=1e-6)
+    # a 1 kg/m^3 body with an upper half of 3 kg/m^3 weighs (1 + 3) / 2 x V and leans up
+    upper = trimesh.creation.box(extents=(0.1, 0.1, 0.1)).apply_translation([0, 0, 0.05])
+    from suctionbench.objects.mass import PARTS
+
+    PARTS["test.upper"] = lambda: upper
+    try:
+        props = mass_properties(box, MassModel("test", density=1.0, part="test.upper", part_density=3.0))
+    finally:
+        del PARTS["test.upper"]
+    assert props.mass == pytest.approx(0.002 * 2.0)
+    assert props.com[2] == pytest.approx((3 * 0.05 - 1 * 0.05) / 4, abs=1e-9)
+
+
+def test_materials_have_sources():
+    for name, mat in MATERIALS.items():
+        assert 100.0 < mat.density < 20000.0 and len(mat.source) > 10, name
+    assert solid("beech").density == pytest.approx(0.64 * 1120, abs=1)  # Wood Handbook SG at 12 % x 1.12
+
+
+def test_object_above_the_cap_is_rejected(tmp_path):
+    cube = trimesh.creation.box(extents=(0.05, 0.05, 0.05))  # 125 cm^3 of steel: 0.98 kg
+    steel = ObjectSpec(name="steel_cube", set="custom", generator="import", mass=solid("steel"))
+    with pytest.raises(InputError, match=r"above the mass cap of 0\.411 kg"):
+        build_object(cube, steel, tmp_path / "steel_cube")
+    assert not (tmp_path / "steel_cube").exists()
+    path = tmp_path / "cube.stl"
+    cube.export(path)
+    with pytest.raises(InputError, match="mass cap"):
+        import_mesh(path, set_name="custom", name="heavy", mass=0.5, root=tmp_path / "objs")
+    ok = import_mesh(path, set_name="custom", name="light", mass=0.3, root=tmp_path / "objs")
+    assert ok.mass == pytest.approx(0.3) and "given" in ok.mass_source
+
+
+def test_large_print_falls_back_to_a_lower_infill(tmp_path):
+    # A 14 cm PLA cube at 20 % infill weighs 1240 (0.2 V + 0.8 A 0.8 mm) = 0.84 kg: the build takes
+    # the first lower infill (5 % steps) under the cap and says so.
+    cube = trimesh.creation.box(extents=(0.14, 0.14, 0.14))
+    spec = ObjectSpec(name="big_print", set="custom", generator="import", mass=printed())
+    record = build_object(cube, spec, tmp_path / "big_print", decompose=False)
+    rho, v, a = 1240.0, 0.14**3, 6 * 0.14**2
+    expected = {f: rho * (f * v + (1 - f) * a * 0.0008) for f in (0.2, 0.15, 0.1, 0.05, 0.0)}
+    chosen = next(f for f, m in expected.items() if m <= CUP_DEFAULT.mass_cap_kg)
+    assert record.mass == pytest.approx(expected[chosen], rel=1e-6)
+    assert f"{chosen * 100:g} % infill" in record.mass_source
+
+
+def test_corpus_specs_carry_material_masses():
+    from suctionbench.objects.corpus import corpus_specs
+
+    specs = corpus_specs(40, seed=1)
+    assert all(s.mass is not None and s.mass.source for s in specs)
+    household = [s for s in specs if s.name.endswith("household")]
+    assert household and all("PLA" not in s.mass.source for s in household)
+    assert all(s.mass.lighter for s in specs)  # every corpus model can fall back under the cap
+
+
+def test_pickability_flags_a_lying_triangular_prism():
+    # Lying on a rectangular face, a triangular prism's other faces are tilted 60 deg from the
+    # horizontal and its ends are vertical: no surface normal within 30 deg of straight down.
+    from suctionbench.objects.stats import APPROACH_CONE, pickability
+
+    assert math.degrees(APPROACH_CONE) == pytest.approx(30.0)
+    record = load_object("basic/prism_tri_toblerone")
+    result = pickability(record, grasps=64, seed=0)
+    for pose, data in zip(result["poses"], record.stable_poses, strict=True):
+        up = np.asarray(data["transform"])[:3, :3] @ [0.0, 0.0, 1.0]  # the prism's axis in the world
+        if abs(up[2]) < 0.1:  # lying
+            assert not pose["pickable"] and pose["in_cone"] == 0
+    cube = pickability(load_object("basic/box_cube"), grasps=64, seed=0)
+    assert cube["pickability"] == pytest.approx(1.0) and not cube["unpickable"]

@@ -14,6 +14,7 @@ from suctionbench.cli.common import (
     JsonOpt,
     SeedOpt,
     objects_app,
+    print_kv,
     print_rows,
     progress_bar,
     record_row,
@@ -103,12 +104,14 @@ def objects_stats(
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
-    """Per-set difficulty: share of surface grasps that seal and that are robust (rwr > 0.2)."""
+    """Per-set difficulty: share of surface grasps that seal and that are robust (rwr > 0.2); per
+    object its known-state pickability (stable-pose share with a grasp of rwr > 0.5 within 30 deg of
+    straight down) and mass; and the mass cap with its derivation."""
 
     def body() -> dict[str, Any]:
         from suctionbench.objects.registry import list_objects
         from suctionbench.objects.spec import SETS
-        from suctionbench.objects.stats import set_stats
+        from suctionbench.objects.stats import pick_criteria, set_stats, stats_rows
 
         if grasps < 1:
             raise InputError(f"--grasps {grasps}: must be at least 1")
@@ -118,10 +121,15 @@ def objects_stats(
             records = list_objects(name)
             with progress_bar(len(records), name, not as_json) as advance:
                 result[name] = set_stats(records, grasps, seed, progress=advance)
+        criteria = pick_criteria()
         if not as_json:
-            print_rows("object sets", [{"set": k, **{c: v for c, v in r.items() if c != "per_object"}}
-                                        for k, r in result.items()])
-        return {"grasps_per_object": grasps, "seed": seed, "sets": result}
+            set_rows, object_rows = stats_rows(result)
+            print_rows("object sets", set_rows)
+            print_rows("known-state pickability (flag: no_surface / load)", object_rows)
+            print_kv("criteria", {"robust": f"rwr > {criteria['pick_threshold_rwr']:g}",
+                                  "approach cone": f"{criteria['approach_cone_deg']:g} deg from straight down",
+                                  "mass cap": criteria["mass_cap"]["derivation"]})
+        return {"grasps_per_object": grasps, "seed": seed, "criteria": criteria, "sets": result}
 
     run_command(as_json, body)
 
@@ -133,7 +141,7 @@ def objects_import(
     name: Annotated[str, typer.Option(help="Object name (lower case, digits, _ and -).")] = "",
     units: Annotated[str, typer.Option(help="Units of the file: m, cm, mm or in.")] = "m",
     scale: Annotated[float, typer.Option(help="Extra scale factor on top of --units (e.g. a URDF mesh scale).")] = 1.0,
-    mass: Annotated[float | None, typer.Option(help="Mass in kg (default: from density, capped).")] = None,
+    mass: Annotated[float | None, typer.Option(help="Mass in kg, at most the mass cap (default: a PLA print).")] = None,
     repair: Annotated[
         bool, typer.Option(help="Repair duplicated faces, touching or overlapping pieces, small holes, stray sheets.")
     ] = True,

@@ -4,8 +4,11 @@ Per object, in its most probable stable pose (gravity along -z): the share of su
 seal and that are robust (rwr > 0.2, the training threshold). And its known-state pickability: over
 its stable poses, the share of stable-pose probability in which at least one grasp is robust
 (rwr > PICK_THRESHOLD) and approaches within the policies' cone (APPROACH_CONE from straight down).
-An object with none is flagged (a triangular prism lying on a face offers only faces tilted 60 deg),
-not removed: it measures what no top-down policy can do.
+Labels are those of the benchmark's known-state policy (LabelConfig.for_episode: the disturbing
+wrench includes the inertial load of the episode's peak acceleration); the same share under the
+weight alone (LabelConfig()) tells an object too heavy to carry through the transport from one with
+no usable surface. An object with none is flagged (a triangular prism lying on a face offers only
+faces tilted 60 deg), not removed: it measures what no top-down policy can do.
 """
 
 from __future__ import annotations
@@ -57,10 +60,11 @@ def pickability(
     record: ObjectRecord, grasps: int, seed: int, config: LabelConfig | None = None,
     threshold: float = PICK_THRESHOLD, cone: float = APPROACH_CONE,
 ) -> dict[str, Any]:
-    """Known-state pickability: per stable pose, whether any of up to `grasps` uniform surface grasps
-    approaching within `cone` of straight down has rwr > `threshold`; and the share of the recorded
-    stable poses' probability that is pickable (labelled with the episode's perturbations, inertial
-    load included, unless `config` says otherwise)."""
+    """Known-state pickability: per recorded stable pose, whether any of up to `grasps` uniform
+    surface grasps approaching within `cone` of straight down has rwr > `threshold` (labelled with
+    `config`, default the episode's: weight and inertial load). `pickability` is the pickable share
+    of the recorded poses' probability; `pose_coverage` is how much probability they hold (the rest
+    lies in poses less probable than the build keeps, e.g. a polygonal cylinder's many sides)."""
     config = config or LabelConfig.for_episode(CUP_DEFAULT)
     mesh0 = record.mesh()
     poses, pickable_mass = [], 0.0
@@ -88,7 +92,21 @@ def pickability(
                       "best_rwr": round(best, 4), "pickable": ok})
     total = sum(p["probability"] for p in record.stable_poses)
     share = pickable_mass / total if total > 0 else 0.0
-    return {"pickability": round(share, 4), "unpickable": share == 0.0, "poses": poses}
+    return {"pickability": round(share, 4), "unpickable": share == 0.0, "pose_coverage": round(total, 4),
+            "poses": poses}
+
+
+def object_pickability(record: ObjectRecord, grasps: int, seed: int) -> dict[str, Any]:
+    """Pickability with the episode's load (`pickability`, per pose in `poses`) and under the weight
+    alone (`pickability_static`); `flag` says why an object has none: "no_surface" (no grasp within
+    the cone is robust even statically) or "load" (robust under its weight, not with the inertial
+    load of the transport)."""
+    episode = pickability(record, grasps, seed)
+    static = pickability(record, grasps, seed, LabelConfig())
+    flag = None
+    if episode["unpickable"]:
+        flag = "no_surface" if static["unpickable"] else "load"
+    return {**episode, "pickability_static": static["pickability"], "flag": flag}
 
 
 def set_stats(
@@ -102,7 +120,7 @@ def set_stats(
         row: dict[str, Any] = {"key": record.key, "mass": record.mass, "mass_source": record.mass_source}
         row.update(object_label_stats(record, grasps, seed))
         if pick:
-            row.update(pickability(record, grasps, seed))
+            row.update(object_pickability(record, grasps, seed))
         per_object.append(row)
         if progress:
             progress(1)
@@ -117,7 +135,8 @@ def set_stats(
     }
     if pick:
         summary["pickability"] = round(float(np.mean([o["pickability"] for o in per_object])), 4)
-        summary["unpickable"] = [o["key"] for o in per_object if o["unpickable"]]
+        summary["pickability_static"] = round(float(np.mean([o["pickability_static"] for o in per_object])), 4)
+        summary["unpickable"] = {o["key"]: o["flag"] for o in per_object if o["unpickable"]}
     summary["per_object"] = per_object
     return summary
 
@@ -129,3 +148,19 @@ def pick_criteria() -> dict[str, Any]:
         "approach_cone_deg": round(float(np.degrees(APPROACH_CONE)), 3),
         "mass_cap": mass_cap(CUP_DEFAULT),
     }
+
+
+def stats_rows(sets: dict[str, dict[str, Any]]) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """Rows for the human tables of `objects stats`: one per set, one per object (pickability)."""
+    set_rows, object_rows = [], []
+    for name, result in sets.items():
+        row = {"set": name, **{k: v for k, v in result.items() if k not in ("per_object", "unpickable")}}
+        if "unpickable" in result:
+            row["unpickable"] = len(result["unpickable"])
+        set_rows.append(row)
+        for obj in result["per_object"]:
+            if "pickability" in obj:
+                object_rows.append({"object": obj["key"], "mass_kg": obj["mass"], "pickability": obj["pickability"],
+                                    "static": obj["pickability_static"], "poses": obj["pose_coverage"],
+                                    "flag": obj["flag"] or ""})
+    return set_rows, object_rows

@@ -52,8 +52,8 @@ BASIC_SPECS: list[ObjectSpec] = [
     _basic("box_cube", "box", "wooden toy cube", solid("beech", "toy block"), extents=[0.08, 0.08, 0.08]),
     _basic("box_stick", "box", "long square wooden stick", solid("pine", "sawn timber"), extents=[0.20, 0.025, 0.025]),
     _basic("box_plank", "box", "wide flat wooden plank", solid("pine", "sawn timber"), extents=[0.24, 0.08, 0.015]),
-    _basic("box_brick", "box", "wooden toy brick (in place of a clay brick, 10 x 5 x 3 cm: ~0.27 kg would do, "
-           "a full-size brick of ~2.5 kg would not)", solid("beech", "toy block"), extents=[0.10, 0.05, 0.03]),
+    _basic("box_brick", "box", "wooden toy brick (a full-size clay brick, ~2.5 kg, is far above the cup's mass cap)",
+           solid("beech", "toy block"), extents=[0.10, 0.05, 0.03]),
     _basic("cylinder_can", "cylinder", "soda can, full (330 ml)", CAN_330_ML, radius=0.033, height=0.12),
     _basic("cylinder_tuna", "cylinder", "tuna can, squat, full (185 g net)",
            MassModel("full tuna can: 185 g net weight (the common 85 mm can) filling it + tinplate can, 0.2 mm "

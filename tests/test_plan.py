@@ -271,7 +271,7 @@ def test_plan_command_prints_the_grasp_and_draws_it(tmp_path):
     (["--depth", "EXAMPLE", "--camera", "primesense", "--policy-arg", "x"], "key=value"),
     (["--depth", "EXAMPLE", "--camera", "primesense", "--policy", "nowhere.py:make"], "not found"),
     (["--depth", "EXAMPLE", "--camera", "realsense-d435"], "give the camera's intrinsics"),
-    (["--depth", "EXAMPLE", "--camera", "primesense", "--depth-scale", "-1"], "positive"),
+    (["--depth", "EXAMPLE", "--camera", "primesense", "--depth-scale", "-1"], "--depth-scale -1"),
 ])
 def test_plan_command_bad_input_exits_2_with_one_line(args, message):
     from typer.testing import CliRunner

@@ -59,13 +59,22 @@ def die_with_parent(parent_pid: int) -> None:
 
 
 def process_pool(workers: int) -> ProcessPoolExecutor:
-    """A process pool whose workers die with this process (`die_with_parent`).
+    """A process pool of fresh interpreters (spawn) whose workers die with this process (`die_with_parent`).
 
-    PR_SET_PDEATHSIG fires when the *thread* that forked the worker ends; the pool forks its
+    Spawn, not fork: a forked worker inherits locks and half-initialised libraries of every other
+    thread of its parent. A parent that has rendered (an OpenGL context with llvmpipe's threads)
+    forks workers whose first render waits forever on threads that do not exist in them; spawned
+    workers start clean and see the parent's current environment and working directory. A worker
+    imports only what its task needs (about 1 s, 3 s with torch).
+
+    PR_SET_PDEATHSIG fires when the *thread* that started the worker ends; the pool starts its
     workers from the thread that submits work, so submit from a thread that outlives the pool
     (the main thread, as every command does).
     """
-    return ProcessPoolExecutor(max_workers=workers, initializer=die_with_parent, initargs=(os.getpid(),))
+    import multiprocessing
+
+    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=die_with_parent, initargs=(os.getpid(),))
 
 
 def map_ordered(

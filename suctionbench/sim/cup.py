@@ -8,7 +8,8 @@ a gap stays open.
 
 Vacuum. `SuctionController` runs a leak test while the vacuum is commanded and lip points touch an
 object: it measures the gap between the lip's edge and that object's surface at `leak_samples`
-places round the lip circle (`mujoco.mj_multiRay`, one call, against the object's surface mesh),
+places round the lip circle (`mujoco.mj_multiRay`, one call, against the object's collision
+geometry, where the lip rests),
 from the distance at which a pressed lip rests (the contact margin), and integrates the leak area
 A = sum max(gap - seal_gap, 0) x arc. The ejector holds the vacuum p(A) where its flow curve meets
 the leak's orifice flow (`suctionbench.vacuum.equilibrium_vacuum`); the cup's pressure follows p(A)
@@ -36,7 +37,8 @@ touch one body within 1 mm and held within 2 mm): kept only as the speed referen
 Collision bitmasks used by the scene (contype / conaffinity):
     environment (table, bin) 1 / 7, objects 1 / 7 + 8 (`expose_to_vacuum`), robot links 2 / 1,
     cup lip and shell 4 / 1, the cup's vacuum probe 8 / 0.
-Geom groups: objects' surface meshes (what the leak test measures) are group 2, collision parts 3.
+Geom groups: objects' visual meshes 2; their collision geoms SURFACE_GROUP (5, what the leak test
+measures) once `expose_to_vacuum` has marked them.
 """
 
 from __future__ import annotations
@@ -57,8 +59,9 @@ VACUUM_CONTYPE = 8
 the robot and the cup do not."""
 _COS_WALL = math.cos(math.radians(45.0))
 """Surfaces steeper than 45 deg to the lip plane are walls, not where a lip rests (`lip_gaps`)."""
-SURFACE_GROUP = 2
-"""Geom group of the objects' surface meshes (suctionbench.objects.mjcf): the leak test's target."""
+SURFACE_GROUP = 5
+"""Geom group of the objects' collision geoms once `expose_to_vacuum` has marked them: the surface
+the lip rests on, which the leak test measures (hidden in renders and the viewer, like group 3)."""
 
 
 @dataclass(frozen=True)
@@ -351,10 +354,17 @@ def add_suction_tool(
 
 
 def expose_to_vacuum(body: mujoco.MjsBody) -> None:
-    """Let the cup's vacuum act on `body`: its colliding geoms accept the vacuum probe's contacts."""
+    """Let the cup act on `body`: its colliding geoms accept the vacuum probe's contacts and join
+    SURFACE_GROUP, the surface the leak test measures.
+
+    The leak test measures the collision geometry, not the surface mesh: the lip rests on the
+    former, and where a convex decomposition bridges a shallow concavity by a millimetre (inside a
+    bowl, across a mug's side) the lip, resting on the bridge, would otherwise see a gap all round.
+    The price: a groove or hole the decomposition fills does not leak in the simulation."""
     for geom in body.geoms:
         if geom.contype or geom.conaffinity:
             geom.conaffinity = geom.conaffinity | VACUUM_CONTYPE
+            geom.group = SURFACE_GROUP
 
 
 class SuctionController:

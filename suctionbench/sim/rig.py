@@ -5,8 +5,8 @@ The carriage is a heavy body (gravity compensated, like a robot holding its tool
 with stiff position servos; it carries the cup at any fixed orientation. `CupRig.grasp` runs the
 episode's grasp: a guarded approach along the cup axis until the bellows is compressed by
 `EpisodeConfig.compression_stop`, the vacuum dwell, a minimum-jerk lift, and a hold, and reports
-what happened. Objects are added by a callback on the MjSpec, with their surface geoms in group 2
-(`suctionbench.sim.cup.SURFACE_GROUP`) so the leak test sees them.
+what happened. Objects are added by a callback on the MjSpec; the rig exposes their colliding geoms
+to the cup (`suctionbench.sim.cup.expose_to_vacuum`: SURFACE_GROUP, where the leak test looks).
 """
 
 from __future__ import annotations
@@ -66,8 +66,8 @@ class RigResult:
 
 
 def add_box(spec: mujoco.MjSpec, name: str, body: mujoco.MjsBody, size, pos, rgba=(0.8, 0.55, 0.3, 1)) -> None:
-    """A box geom that is both collision and leak-test surface (group 2), with the objects'
-    friction, solver and collision settings (suctionbench.objects.mjcf)."""
+    """A box geom with the objects' friction, solver and collision settings
+    (suctionbench.objects.mjcf)."""
     from suctionbench.objects.mjcf import CONTACT_SOLREF, OBJECT_CONAFFINITY, OBJECT_CONTYPE, TORSIONAL_FRICTION
 
     body.add_geom(

@@ -113,9 +113,10 @@ def _time_fast_vs_reference(
 def bench_episode(*, object_key: str, episodes: int, cores: int, seed: int) -> dict[str, Any]:
     """Full pick episodes per second (observation rendering included) with the compliant, leak-aware
     cup, timed against the rigid reference cup (`SimCupConfig.rigid()`) on the same seeds in the
-    same run: wall time per episode of each and their ratio, the simulated-time / wall-time ratio,
-    render time per depth frame, success rates, and the cup's peak accelerations in the lift and the
-    transport (the inertial load of the labeller's disturbing wrench)."""
+    same run, episode by episode in turn so both see the same machine load: wall and CPU time per
+    episode of each and their ratios, the simulated-time / wall-time ratio, render time per depth
+    frame, success rates, and the cup's peak accelerations in the lift and the transport (the
+    inertial load of the labeller's disturbing wrench)."""
     from suctionbench.sensing.camera import DepthRenderer
     from suctionbench.sim.cup import SimCupConfig
     from suctionbench.sim.pick import PickRequest, PickRunner
@@ -123,32 +124,36 @@ def bench_episode(*, object_key: str, episodes: int, cores: int, seed: int) -> d
     if episodes < 1:
         raise InputError(f"--episodes {episodes}: must be at least 1")
     used_cores = _limit_cores(cores)
-    runs: dict[str, dict[str, Any]] = {}
-    for name, sim_cup in (("compliant", SimCupConfig()), ("rigid", SimCupConfig.rigid())):
+    cups = {"compliant": SimCupConfig(), "rigid": SimCupConfig.rigid()}
+    runners, renderers, stats = {}, {}, {}
+    for name, sim_cup in cups.items():
         start = time.perf_counter()
-        runner = PickRunner(PickRequest(object_key, seed=seed, sim_cup=sim_cup))
-        build_s = time.perf_counter() - start
-        renderer = DepthRenderer(runner.scene.model, runner.intrinsics)
-        walls, sims, renders, successes, accel = [], [], [], 0, {"lift": [], "transport": []}
-        try:
-            for k in range(episodes):
+        runners[name] = PickRunner(PickRequest(object_key, seed=seed, sim_cup=sim_cup))
+        stats[name] = {"build_s": time.perf_counter() - start, "walls": [], "cpus": [], "sims": [], "renders": [],
+                       "successes": 0, "accel": {"lift": [], "transport": []}}
+    try:
+        for name, runner in runners.items():
+            renderers[name] = DepthRenderer(runner.scene.model, runner.intrinsics)
+        for k in range(episodes):
+            for name, runner in runners.items():
+                st = stats[name]
                 runner.request.seed = seed + k
-                wall = time.perf_counter()
+                wall, cpu = time.perf_counter(), time.process_time()
                 runner.episode.reset(np.random.default_rng((seed + k, 0)))
                 t = time.perf_counter()
-                renderer.render(runner.episode.data, runner.scene.camera)
-                renders.append(time.perf_counter() - t)
+                renderers[name].render(runner.episode.data, runner.scene.camera)
+                st["renders"].append(time.perf_counter() - t)
                 result = runner.run_after_reset()
-                walls.append(time.perf_counter() - wall)
-                sims.append(result["sim_time"] + result.get("placement_time", 0.0))
-                successes += bool(result["success"])
+                st["walls"].append(time.perf_counter() - wall)
+                st["cpus"].append(time.process_time() - cpu)
+                st["sims"].append(result["sim_time"] + result.get("placement_time", 0.0))
+                st["successes"] += bool(result["success"])
                 for motion, value in result.get("peak_acceleration", {}).items():
-                    accel.setdefault(motion, []).append(value)
-        finally:
+                    st["accel"].setdefault(motion, []).append(value)
+    finally:
+        for renderer in renderers.values():
             renderer.close()
-        runs[name] = {"build_s": build_s, "walls": walls, "sims": sims, "renders": renders,
-                      "successes": successes, "accel": accel}
-    compliant, rigid = runs["compliant"], runs["rigid"]
+    compliant, rigid = stats["compliant"], stats["rigid"]
     mean_c, mean_r = float(np.mean(compliant["walls"])), float(np.mean(rigid["walls"]))
     accel = compliant["accel"]
     return {
@@ -161,6 +166,9 @@ def bench_episode(*, object_key: str, episodes: int, cores: int, seed: int) -> d
         "episodes_per_s": round(1.0 / mean_c, 2),
         "rigid_episode_wall_s_mean": round(mean_r, 4),
         "compliant_over_rigid": round(mean_c / mean_r, 3),
+        "episode_cpu_s_mean": round(float(np.mean(compliant["cpus"])), 4),
+        "rigid_episode_cpu_s_mean": round(float(np.mean(rigid["cpus"])), 4),
+        "compliant_over_rigid_cpu": round(float(np.sum(compliant["cpus"]) / np.sum(rigid["cpus"])), 3),
         "sim_to_wall_ratio": round(float(np.sum(compliant["sims"]) / np.sum(compliant["walls"])), 2),
         "render_ms_per_frame": round(1e3 * float(np.median(compliant["renders"] + rigid["renders"])), 2),
         "success_rate": round(compliant["successes"] / episodes, 3),

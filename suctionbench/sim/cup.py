@@ -406,6 +406,8 @@ class SuctionController:
         self._ray_geom = np.zeros(k, dtype=np.int32)
         self._ray_dist = np.zeros(k)
         self._ray_normal = np.zeros((k, 3))
+        self._fold_weights = _periodic_interpolation(self._phi, n) if n else np.zeros((k, 0))
+        """(k, n): the lip's fold at each leak-test place, linear between its points round the circle."""
 
     # -- read-outs --------------------------------------------------------------------------------
     def compression(self, data: mujoco.MjData) -> float:
@@ -480,21 +482,20 @@ class SuctionController:
         rests on: the correction stops growing there."""
         cup, sim = self.cup, self.sim
         rot = data.xmat[self.bellow].reshape(3, 3)
-        origin = data.xpos[self.bellow]
-        # The lip's edge between its points: the points' folds interpolated round the circle.
-        fold = np.interp(self._phi, self._theta, data.qpos[self.lip_qpos], period=2.0 * math.pi)
-        local = np.column_stack([self._ring, cup.height + fold])
-        places = origin + local @ rot.T
         axis = rot[:, 2]
-        apex = origin + (cup.height - sim.ray_apex_height) * axis
-        rays = places - apex
-        length = np.linalg.norm(rays, axis=1)
-        rays /= length[:, None]
+        apex = data.xpos[self.bellow] + (cup.height - sim.ray_apex_height) * axis
+        # In the bellows' frame a lip place is (r cos phi, r sin phi, h + fold(phi)), the lip's edge
+        # between its points following their folds (linear interpolation round the circle), and
+        # the apex is (0, 0, h - H): the ray to a place is (r cos phi, r sin phi, H + fold).
+        depth = sim.ray_apex_height + self._fold_weights @ data.qpos[self.lip_qpos]
+        length = np.sqrt(cup.radius**2 + depth * depth)
+        local = np.column_stack([self._ring, depth]) / length[:, None]
+        rays = local @ rot.T
         cutoff = float(length.max() + cup.radius)
         mujoco.mj_multiRay(self.model, data, apex, rays.ravel(), self._group, 0, -1, self._ray_geom,
                            self._ray_dist, self._ray_normal.ravel(), len(rays), cutoff)
-        hit = (self._ray_geom >= 0) & (self.model.geom_bodyid[np.maximum(self._ray_geom, 0)] == body)
-        beyond = (self._ray_dist - length) * (rays @ axis)  # axial distance from the lip's edge
+        hit = (self._ray_geom >= 0) & (self.model.geom_bodyid[self._ray_geom] == body)
+        beyond = (self._ray_dist - length) * local[:, 2]  # axial distance from the lip's edge
         cos_slope = np.maximum(np.abs(self._ray_normal @ axis), _COS_WALL)
         rest = (sim.lip_sphere_radius + sim.contact_margin) / cos_slope - sim.lip_sphere_radius
         gaps = np.where(hit, beyond - rest, cup.radius)
@@ -523,3 +524,15 @@ class SuctionController:
         self.sealed = body if self.commanded else -1
         data.ctrl[self.actuators] = 1.0 if (self.commanded and body >= 0) else 0.0
         return body
+
+
+def _periodic_interpolation(phi: np.ndarray, n: int) -> np.ndarray:
+    """(len(phi), n) weights of linear interpolation at angles `phi` between n values at angles
+    2 pi i / n, periodic."""
+    position = np.asarray(phi) / (2.0 * math.pi) * n
+    lower = np.floor(position).astype(int) % n
+    frac = position - np.floor(position)
+    weights = np.zeros((len(position), n))
+    weights[np.arange(len(position)), lower] += 1.0 - frac
+    weights[np.arange(len(position)), (lower + 1) % n] += frac
+    return weights

@@ -20,12 +20,20 @@ from suctionbench.objects.spec import SETS
 
 
 def _cached(directory: Path, spec: Any) -> ObjectRecord | None:
-    """The built object at `directory` if it exists and was built from exactly `spec`."""
+    """The built object at `directory` if it exists and was built from exactly `spec`: same generator
+    and parameters, and its mass from the spec's mass model (or one of its lighter variants), so
+    objects built before real masses are rebuilt."""
+    from suctionbench.objects.mass import variants
+
     try:
         record = ObjectRecord.load(directory)
     except (InputError, TypeError):
         return None
-    return record if (record.generator, record.params) == (spec.generator, spec.params) else None
+    if (record.generator, record.params) != (spec.generator, spec.params):
+        return None
+    sources = {v.source for v in variants(spec.mass_model())}
+    fresh = any(record.mass_source == s or record.mass_source.startswith(s + "; ") for s in sources)  # floor note
+    return record if fresh else None
 
 
 def evaluation_fingerprints() -> tuple[set[str], set[str]]:

@@ -77,7 +77,7 @@ OPTION_RULES: dict[str, Rule] = {
     # physical quantities and thresholds
     "mass": Rule(0.0, 1000.0, low_open=True, meaning="kg"),
     "threshold": Rule(0.0, 1.0, meaning="a robust wrench resistance"),
-    "scale": Rule(0.0, 1e6, low_open=True, meaning="a scale factor"),
+    "scale": Rule(),  # finite here; objects.importer checks it is positive, with its own message
     "depth_scale": Rule(0.0, 1.0, low_open=True, meaning="metres per depth unit, e.g. 0.001 for millimetres"),
     "table_height": Rule(-10.0, 10.0, meaning="m"),
 }

@@ -106,6 +106,12 @@ class CupConfig:
     sets the vacuum; suctionbench/contact/seal.py) or "springs" (the paper's literal quasi-static
     spring model with its stretch limit, constant V; the `paper` preset)."""
 
+    bellows_swing: bool = True
+    """The bellows bends under the load's moment (bending_stiffness, up to approach_tolerance), so
+    a lifted object swings towards hanging with its centre of mass below the lip and the seal
+    carries only what the bellows resists (contact/wrench.py, `bellows_swing`). False: a cup rigid
+    in bending, as the paper's quasi-static model (the `paper` preset)."""
+
     def __post_init__(self) -> None:
         checks = {
             "seal_model": self.seal_model in SEAL_MODELS,
@@ -208,9 +214,12 @@ CUP_DEFAULT = CupConfig()
 """The physical cup: 15 mm silicone bellows, 60 kPa ejector, V = 60 kPa x pi (6.5 mm)^2 = 7.96 N,
 ring-pressure tilt limit."""
 
-CUP_PAPER = CupConfig(name="paper", vacuum_force_override=250.0, kappa=0.005, seal_model="springs")
+CUP_PAPER = CupConfig(
+    name="paper", vacuum_force_override=250.0, kappa=0.005, seal_model="springs", bellows_swing=False
+)
 """The paper's literal values, V = 250 N and kappa = 0.005 (units as the paper states them): fitted by
-grid search against its robot trials, not physical constants; with the paper's spring seal model."""
+grid search against its robot trials, not physical constants; with the paper's spring seal model and a
+cup rigid in bending."""
 
 
 CUP_PRESETS: dict[str, CupConfig] = {"default": CUP_DEFAULT, "paper": CUP_PAPER}

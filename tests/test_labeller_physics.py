@@ -9,11 +9,13 @@ falls to its 50 % switch point).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 import trimesh
+from scipy.optimize import brentq
 from conftest import box, difference
 
 from suctionbench.config import (
@@ -219,35 +221,50 @@ BAR_MASS = 0.2
 
 
 def bar_limit_offset(mass: float) -> float:
-    """Offset d* (m) at which m g d reaches the ring limit r (V - m g) / 2."""
+    """Offset d* (m) at which the rigid moment m g d reaches the ring limit r (V - m g) / 2."""
     return CUP.radius * (CUP.vacuum_force - mass * G) / (2.0 * mass * G)
+
+
+def swung_bar_limit_offset(mass: float, depth: float) -> float:
+    """Offset d* (m) at which a bar hanging from a bellows on its tilt stop theta_m peels:
+    m g (d cos theta_m - h sin theta_m) = r (V - m g cos theta_m) / 2, h the COM's depth."""
+    theta = CUP.approach_tolerance
+    limit = CUP.radius * (CUP.vacuum_force - mass * G * math.cos(theta)) / 2.0
+    return (limit / (mass * G) + depth * math.sin(theta)) / math.cos(theta)
 
 
 def test_bar_gripped_off_centre_drops_at_the_ring_peel_limit():
     # A 0.2 kg bar (20 x 3 x 2 cm) gripped on its top face at an offset d from its centre of mass
-    # along its length. About the contact the weight is a pull m g along the approach (f_z = -m g)
-    # plus a tilting torque m g d (the COM's 1 cm depth below the face adds none: the force is
-    # vertical). The ring pressure p(theta) = p0 + p_x cos + p_y sin must stay >= 0 round the lip:
-    # ||tau|| = pi r sqrt(p_x^2 + p_y^2) <= pi r p0 = r (V + f_z) / 2 = r (V - m g) / 2 =
-    # 7.5 mm x (7.96 - 1.96) N / 2 = 22.5 mN m, so the bar is held iff d <= d* = 11.5 mm.
-    # Friction and torsion are idle (no tangential force). Checked on the nominal wrench path, on
-    # the robust path with every perturbation off, and on the cone-program reference.
-    d_star = bar_limit_offset(BAR_MASS)
+    # along its length, its COM h = 1 cm below the face. Rigidly, the weight is a pull m g along the
+    # approach plus a tilting torque m g d, and the ring pressure p(theta) = p0 + p_x cos + p_y sin
+    # must stay >= 0 round the lip: ||tau|| = pi r sqrt(p_x^2 + p_y^2) <= pi r p0 = r (V + f_z) / 2
+    # = 7.5 mm x (7.96 - 1.96) N / 2 = 22.5 mN m, held iff d <= 11.5 mm.
+    # The bellows bends (k_b = 0.032 N m/rad) so the bar swings towards hanging below the lip;
+    # hanging straight needs a tilt atan(d / h) >= 45 deg here, beyond the bellows' stop theta_m =
+    # atan(stroke / 2 r) = 21.8 deg, which it reaches once m g (d cos theta_m - h sin theta_m) >
+    # k_b theta_m = 12.1 mN m, i.e. from d = 10.6 mm. On the stop the lip carries the tilted weight:
+    # a pull m g cos theta_m, a shear m g sin theta_m (0.73 N, well inside mu (V - m g cos) /
+    # sqrt(3) = 1.77 N) and the moment m g (d cos theta_m - h sin theta_m), so the ring limit
+    # r (V - m g cos theta_m) / 2 = 23.0 mN m is reached at d* = 16.6 mm. The rigid cup's d* = 11.5
+    # mm is checked with bellows_swing off. Checked on the nominal wrench path, on the robust path
+    # with every perturbation off, and on the cone-program reference.
     assert CUP.radius * (CUP.vacuum_force - BAR_MASS * G) / 2 == pytest.approx(0.0225, abs=1e-4)
-    assert d_star == pytest.approx(0.0115, abs=1e-4)
     mesh = box((0.20, 0.03, 0.02))
     factors = np.array([0.0, 0.5, 0.9, 0.98, 1.02, 1.1, 2.0, 4.0])
-    points = np.stack([factors * d_star, np.zeros_like(factors), np.full_like(factors, 0.01)], axis=1)
-    approaches = np.repeat(DOWN, len(factors), axis=0)
-    expected = factors <= 1.0
-    labeller = SuctionLabeller(mesh, mass=BAR_MASS)
-    assert labeller.seal(points, approaches).seal.all()
-    np.testing.assert_array_equal(labeller.wrench_resistance(points, approaches), expected)
-    exact = SuctionLabeller(mesh, LabelConfig(perturbation=NO_NOISE), mass=BAR_MASS)
-    rwr, _ = exact.robust(points, approaches, seed=0)
-    np.testing.assert_array_equal(rwr == 1.0, expected)
-    ref, _ = exact.robust(points, approaches, seed=0, reference=True)
-    np.testing.assert_array_equal(ref, rwr)
+    rigid_cup = dataclasses.replace(CUP, bellows_swing=False)
+    for cup, d_star in ((CUP, swung_bar_limit_offset(BAR_MASS, 0.01)), (rigid_cup, bar_limit_offset(BAR_MASS))):
+        assert d_star == pytest.approx(0.0166 if cup.bellows_swing else 0.0115, abs=1e-4)
+        points = np.stack([factors * d_star, np.zeros_like(factors), np.full_like(factors, 0.01)], axis=1)
+        approaches = np.repeat(DOWN, len(factors), axis=0)
+        expected = factors <= 1.0
+        labeller = SuctionLabeller(mesh, LabelConfig(cup=cup), mass=BAR_MASS)
+        assert labeller.seal(points, approaches).seal.all()
+        np.testing.assert_array_equal(labeller.wrench_resistance(points, approaches), expected)
+        exact = SuctionLabeller(mesh, LabelConfig(cup=cup, perturbation=NO_NOISE), mass=BAR_MASS)
+        rwr, _ = exact.robust(points, approaches, seed=0)
+        np.testing.assert_array_equal(rwr == 1.0, expected)
+        ref, _ = exact.robust(points, approaches, seed=0, reference=True)
+        np.testing.assert_array_equal(ref, rwr)
 
 
 def test_inertial_load_of_the_lift_and_the_transport():
@@ -255,10 +272,13 @@ def test_inertial_load_of_the_lift_and_the_transport():
     # (it hangs with m (g + a)) and the transport (a horizontal d'Alembert force m a at the COM).
     # (1) A centred top grasp on a flat box of 0.7 kg: m g = 6.86 N < V = 7.96 N holds, but
     #     m (g + a) = 9.04 N > V: the lift pulls it off.
-    # (2) A centred top grasp on a tall 0.3 kg box whose COM is 5 cm below the face: statically
-    #     no torque; in transport m a x 5 cm = 46.5 mN m, beyond the ring limit
-    #     r (V - m g) / 2 = 18.8 mN m (more than twice it), in every horizontal direction: every
-    #     sample drops.
+    # (2) A centred top grasp on a tall 0.3 kg box whose COM is h = 5 cm below the face: statically
+    #     no torque; in transport, on a cup rigid in bending, m a h = 46.5 mN m, beyond the ring
+    #     limit r (V - m g) / 2 = 18.8 mN m (more than twice it) in every horizontal direction:
+    #     every sample drops. The bellows bends instead: the box swings about the lip centre until
+    #     m h (a cos t - g sin t) = k_b t (the pendulum towards g - a, resisted by the bellows);
+    #     t = 14.5 deg < the 21.8 deg stop, and the lip carries k_b t = 8.0 mN m with the pull
+    #     m (g cos t + a sin t) = 3.1 N, inside r (V - 3.1 N) / 2 = 18.3 mN m: held.
     episode = LabelConfig.for_episode(CUP)
     assert episode.perturbation.inertial_acceleration == CUP.peak_acceleration == 3.1
     flat = box((0.12, 0.08, 0.04))
@@ -268,11 +288,19 @@ def test_inertial_load_of_the_lift_and_the_transport():
     tall = box((0.06, 0.06, 0.10))
     assert 2 * CUP.radius * (CUP.vacuum_force - 0.3 * G) / 2 < 0.3 * 3.1 * 0.05
     top = np.array([[0.0, 0.0, 0.05]])
-    static = SuctionLabeller(tall, mass=0.3)
-    moving = SuctionLabeller(tall, episode, mass=0.3)
+    rigid_cup = dataclasses.replace(CUP, bellows_swing=False)
+    rigid_episode = LabelConfig.for_episode(rigid_cup)
+    static = SuctionLabeller(tall, LabelConfig(cup=rigid_cup), mass=0.3)
+    moving = SuctionLabeller(tall, rigid_episode, mass=0.3)
     assert static.wrench_resistance(top, DOWN)[0] and not moving.wrench_resistance(top, DOWN)[0]
     assert static.robust(top, DOWN, seed=4)[0][0] > 0.5  # (0.1 rad object noise x 5 cm lever bites)
     assert moving.robust(top, DOWN, seed=4)[0][0] == 0.0
+    k_b, m, h = CUP.bending_stiffness, 0.3, 0.05
+    tilt = brentq(lambda t: m * h * (3.1 * math.cos(t) - G * math.sin(t)) - k_b * t, 0.0, CUP.approach_tolerance)
+    assert math.degrees(tilt) == pytest.approx(14.5, abs=0.1)
+    pull = m * (G * math.cos(tilt) + 3.1 * math.sin(tilt))
+    assert k_b * tilt < CUP.radius * (CUP.vacuum_force - pull) / 2
+    assert SuctionLabeller(tall, episode, mass=0.3).wrench_resistance(top, DOWN)[0]
 
 
 def test_inertial_load_keeps_the_papers_draws_and_batch_independence():
@@ -312,3 +340,36 @@ def test_inertial_reference_path_agrees_with_the_fast_path():
     ref, ref_samples = labeller.robust(points, approaches, seed=3, reference=True)
     np.testing.assert_array_equal(fast_samples, ref_samples)
     assert fast_samples.any() and not fast_samples.all()
+
+
+def test_bellows_swing_is_the_pendulum_equilibrium():
+    # Object hanging from the lip (contact frame = world with z down, the approach), centre of mass
+    # h below the lip centre, load f = m (a, 0, g) (weight plus a sideways d'Alembert force). The
+    # object turns about y by t until the moment of the turned load about the lip equals the
+    # bellows' k_b t: m h (a cos t - g sin t) = k_b t. The swing only turns the load: |f| is kept,
+    # the moment left is k_b t (below the stop) and it is smaller than the rigid m a h. An object
+    # standing on the cup (centre of mass above the lip) is an inverted pendulum: heavier than
+    # k_b / h per g it falls onto the bellows' stop, where the moment grows to m g h sin(t_max)
+    # plus the original; a cup rigid in bending (the paper's) leaves the load untouched.
+    from suctionbench.contact.wrench import bellows_swing, external_wrench_at_contact
+
+    frame = np.eye(3)[None]
+    centre = np.zeros((1, 3))
+    k_b, stop = CUP.bending_stiffness, CUP.approach_tolerance
+    for m, h, a in ((0.3, 0.05, 3.1), (0.05, 0.02, 3.1), (0.4, 0.04, 1.0)):
+        force = np.array([[m * a, 0.0, m * G]])
+        com = np.array([[0.0, 0.0, h]])
+        swung = bellows_swing(force, com, centre, frame, CUP)
+        assert np.linalg.norm(swung) == pytest.approx(np.linalg.norm(force), rel=1e-12)
+        tilt = brentq(lambda t: m * h * (a * math.cos(t) - G * math.sin(t)) - k_b * t, 0.0, stop)
+        moment = external_wrench_at_contact(swung, com, centre, frame)[0, 3:]
+        assert np.linalg.norm(moment) == pytest.approx(k_b * tilt, rel=1e-6)
+        assert np.linalg.norm(moment) < m * a * h
+        rigid = bellows_swing(force, com, centre, frame, dataclasses.replace(CUP, bellows_swing=False))
+        np.testing.assert_array_equal(rigid, force)
+    # inverted: 0.2 kg, 3 cm above the lip, nudged sideways by 0.1 N: m g h = 59 mN m per rad > k_b
+    force, com = np.array([[0.1, 0.0, 0.2 * G]]), np.array([[0.0, 0.0, -0.03]])
+    swung = bellows_swing(force, com, centre, frame, CUP)
+    moment = np.linalg.norm(external_wrench_at_contact(swung, com, centre, frame)[0, 3:])
+    on_stop = 0.03 * (0.1 * math.cos(stop) + 0.2 * G * math.sin(stop))
+    assert moment == pytest.approx(on_stop, rel=1e-9) and moment > 0.03 * 0.1

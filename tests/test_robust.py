@@ -17,7 +17,7 @@ from scipy.spatial.transform import Rotation
 from suctionbench.config import STANDARD_GRAVITY, LabelConfig, PerturbationConfig
 from suctionbench.contact import METRICS, SuctionLabeller
 from suctionbench.contact.robust import sample_perturbations
-from suctionbench.contact.wrench import external_wrench_at_contact, resists
+from suctionbench.contact.wrench import bellows_swing, external_wrench_at_contact, resists
 from suctionbench.errors import InputError
 from suctionbench.geometry.sampling import sample_surface_grasps
 from suctionbench.geometry.shapes import superellipsoid
@@ -91,7 +91,7 @@ def test_same_seed_same_labels_and_batch_independence(soap):
 
 def test_robust_label_is_the_composition_of_its_parts(soap):
     # rwr = mean_j [seal_j and resist_j]: recompute each sample's seal with the full (unstaged)
-    # seal model and its wrench test (with the vacuum that seal holds) separately, then compose,
+    # seal model and its wrench test (on the load the bellows' swing leaves) (with the vacuum that seal holds) separately, then compose,
     # and compare with the fast path.
     labeller = SuctionLabeller(soap, mass=0.15)
     points, approaches = sample_surface_grasps(soap, 40, np.random.default_rng(1))
@@ -102,7 +102,8 @@ def test_robust_label_is_the_composition_of_its_parts(soap):
     )
     seal = labeller.seal_model.evaluate(samples.points, samples.frames)
     assert samples.loads.shape == (len(samples.points), 1, 3)  # no inertial load by default
-    wrench = external_wrench_at_contact(samples.force, samples.com, seal.ring_centre, samples.frames)
+    load = bellows_swing(samples.force, samples.com, seal.ring_centre, samples.frames, labeller.config.cup)
+    wrench = external_wrench_at_contact(load, samples.com, seal.ring_centre, samples.frames)
     resisted = resists(wrench, samples.friction, labeller.config.cup, seal.vacuum_force)
     composed = (seal.seal & resisted).reshape(outcomes.shape)
     np.testing.assert_array_equal(outcomes, composed)

@@ -32,7 +32,7 @@ from scipy.special import ndtr, ndtri
 
 from suctionbench.config import CupConfig, PerturbationConfig
 from suctionbench.contact.seal import SealModel
-from suctionbench.contact.wrench import external_wrench_at_contact, resists, resists_qp
+from suctionbench.contact.wrench import bellows_swing, external_wrench_at_contact, resists, resists_qp
 from suctionbench.geometry.frames import so3_exp
 
 CHUNK_SAMPLES = 8192
@@ -196,7 +196,8 @@ def _wrench_gate(loads: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.
     def gate(idx: np.ndarray, centres: np.ndarray, vacuum: np.ndarray) -> np.ndarray:
         ok = np.ones(len(idx), dtype=bool)
         for case in range(loads.shape[1]):
-            wrench = external_wrench_at_contact(loads[idx, case], com[idx], centres, frames[idx])
+            load = bellows_swing(loads[idx, case], com[idx], centres, frames[idx], cup)
+            wrench = external_wrench_at_contact(load, com[idx], centres, frames[idx])
             ok &= resists(wrench, mu[idx], cup, vacuum)
         return ok
 
@@ -212,12 +213,16 @@ def evaluate_samples_reference(seal: SealModel, samples: GraspSamples) -> np.nda
         result = seal.evaluate(samples.points[i : i + 1], samples.frames[i : i + 1])
         if not result.seal[0]:
             continue
+        centre, frame = result.ring_centre[0], samples.frames[i]
+        swung = bellows_swing(loads[i], np.broadcast_to(samples.com[i], loads[i].shape),
+                              np.broadcast_to(centre, loads[i].shape), np.broadcast_to(frame, (len(loads[i]), 3, 3)),
+                              seal.cup)
         out[i] = all(
             resists_qp(
-                load, samples.com[i], result.ring_centre[0], samples.frames[i], float(samples.friction[i]),
+                load, samples.com[i], centre, frame, float(samples.friction[i]),
                 seal.cup, vacuum_force=float(result.vacuum_force[0]),
             )[0]
-            for load in loads[i]
+            for load in swung
         )
     return out
 

@@ -100,6 +100,68 @@ def external_wrench_at_contact(
     )
 
 
+SWING_BISECTIONS = 32
+"""Bisection steps of the bellows' equilibrium tilt: the bracket [0, approach_tolerance] (0.38 rad)
+shrinks to ~1e-10 rad."""
+
+
+def bellows_swing(
+    force: np.ndarray, com: np.ndarray, ring_centre: np.ndarray, frames: np.ndarray, cup: CupConfig
+) -> np.ndarray:
+    """The load (N, 3) (object frame) as the lifted object feels it once the bellows has bent to
+    equilibrium: the same force, rotated with the object about the lip centre.
+
+    Why. A bellows is soft in bending (k_b = cup.bending_stiffness, 0.032 N m/rad by default), so a
+    load whose moment tips the lip does not hold the object rigidly: the object and the lip swing
+    together, as a pendulum, until the moment about the lip centre has fallen to what the bent
+    bellows returns, k_b theta, or until the bellows reaches its tilt stop theta_max =
+    cup.approach_tolerance (one side of the wall at full stroke), beyond which the stop carries
+    the rest. The seal then carries the swung wrench. A heavy box held at the centre of its top
+    face and carried sideways at a = 3.1 m/s^2 would, rigidly, put m a d (41 mN m for 0.37 kg
+    with its centre 4 cm below the lip) on a lip that holds r (V - m g) / 2 = 16 mN m; swung it
+    hangs along g - a and the lip carries ~8 mN m.
+
+    Derivation (contact frame, z = approach, arm r = c - o from the lip centre o to the centre of
+    mass, force f). The in-plane moment tau = (r x f)_xy tips the lip about n = tau / |tau|. Tilting
+    the object by theta about n turns a fixed external force, seen from the object, by -theta
+    about n (Rodrigues: f cos theta - (n x f) sin theta + n (n.f)(1 - cos theta)); its moment about
+    n becomes A cos theta - B sin theta with A = |tau| and B = r.f - (n.f)(n.r) (B > 0 for a
+    hanging load: the pendulum's restoring term). Equilibrium: A cos theta - B sin theta = k_b
+    theta, solved by bisection on [0, theta_max] (the left side minus k_b theta is A >= 0 at 0);
+    where it is still positive at theta_max the bellows rests on its stop at theta_max. Twisting
+    moments (about z) are not relieved: the bellows is stiff in torsion. Left out: the bellows'
+    own tilt from sealing on a face off the approach (its moment k_b alpha, and the range it
+    leaves), and the swing's dynamics (a suddenly applied load overshoots the static tilt).
+    """
+    force = np.asarray(force, dtype=float)
+    if not cup.bellows_swing:
+        return force
+    f_c = np.einsum("nji,nj->ni", frames, force)
+    r_c = np.einsum("nji,nj->ni", frames, np.asarray(com, dtype=float) - ring_centre)
+    tau = np.cross(r_c, f_c)
+    a = np.hypot(tau[:, 0], tau[:, 1])
+    tips = a > 1e-15
+    n = np.zeros_like(f_c)
+    n[tips, :2] = tau[tips, :2] / a[tips, None]
+    n_f = np.einsum("ni,ni->n", n, f_c)
+    b = np.einsum("ni,ni->n", r_c, f_c) - n_f * np.einsum("ni,ni->n", n, r_c)
+    k, theta_max = cup.bending_stiffness, cup.approach_tolerance
+
+    def excess(theta: np.ndarray) -> np.ndarray:
+        return a * np.cos(theta) - b * np.sin(theta) - k * theta
+
+    low, high = np.zeros_like(a), np.full_like(a, theta_max)
+    for _ in range(SWING_BISECTIONS):
+        mid = 0.5 * (low + high)
+        right = excess(mid) > 0.0
+        low, high = np.where(right, mid, low), np.where(right, high, mid)
+    theta = np.where(excess(np.full_like(a, theta_max)) > 0.0, theta_max, 0.5 * (low + high))
+    theta = np.where(tips, theta, 0.0)
+    c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
+    swung = f_c * c - np.cross(n, f_c) * s + n * n_f[:, None] * (1.0 - c)
+    return np.einsum("nij,nj->ni", frames, swung)
+
+
 def resists(
     wrench_contact: np.ndarray,
     mu: np.ndarray | float,

@@ -5,14 +5,12 @@ or on Ray (an existing cluster via `address`, else a local one started for the c
 from __future__ import annotations
 
 import os
-import signal
-import sys
-import threading
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
 from suctionbench.errors import InputError
+from suctionbench.lifeline import die_with_parent
 
 ENGINES = ("local", "ray")
 """Available execution engines."""
@@ -22,40 +20,6 @@ def check_engine(engine: str) -> None:
     """InputError for an unknown engine; callers check before they write any output."""
     if engine not in ENGINES:
         raise InputError(f"--engine '{engine}': expected {' or '.join(ENGINES)}")
-
-
-PR_SET_PDEATHSIG = 1
-"""linux/prctl.h: the signal a process gets when its parent dies."""
-
-PARENT_POLL_S = 1.0
-"""Where prctl is not available, how often a worker checks that its parent still lives."""
-
-
-def die_with_parent(parent_pid: int) -> None:
-    """Pool worker initializer: end this worker when the process that started it dies (a killed
-    `generate` or `eval` leaves no orphan blocked on a dead pipe).
-
-    On Linux the kernel sends SIGKILL on the parent's death (prctl PR_SET_PDEATHSIG); elsewhere a
-    daemon thread polls the parent id. Either way, a parent already gone ends the worker at once.
-    """
-    armed = False
-    if sys.platform.startswith("linux"):
-        import ctypes
-
-        try:
-            libc = ctypes.CDLL(None, use_errno=True)
-            armed = libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) == 0
-        except (OSError, AttributeError):
-            armed = False
-    if os.getppid() != parent_pid:  # the parent died before the signal was armed
-        os._exit(1)
-    if not armed:
-        def watch() -> None:
-            while os.getppid() == parent_pid:
-                threading.Event().wait(PARENT_POLL_S)
-            os._exit(1)
-
-        threading.Thread(target=watch, name="parent-watch", daemon=True).start()
 
 
 def process_pool(workers: int) -> ProcessPoolExecutor:

@@ -74,6 +74,53 @@ def child_pids(pid: int) -> list[int]:
     return [int(p) for p in out.split()]
 
 
+FAKE_COACD = """
+import os, pathlib, time
+def set_log_level(level): pass
+class Mesh:
+    def __init__(self, vertices, faces): pass
+def run_coacd(mesh, **options):
+    path = os.environ["FAKE_COACD_STARTED"]
+    pathlib.Path(path + ".tmp").write_text(str(os.getpid()))
+    os.replace(path + ".tmp", path)
+    time.sleep(120)
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_coacd_child_dies_with_its_killed_parent(tmp_path):
+    """kill -9 of a process in the middle of a convex decomposition: its CoACD child (the real child
+    script, with a stand-in coacd that computes for 120 s) is gone within ORPHAN_GRACE_S."""
+    fake = tmp_path / "fake"
+    fake.mkdir()
+    (fake / "coacd.py").write_text(FAKE_COACD)
+    started = tmp_path / "started"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(fake), os.environ.get("PYTHONPATH")])),
+           "TMPDIR": str(tmp_path), "FAKE_COACD_STARTED": str(started)}
+    script = textwrap.dedent("""
+        import trimesh
+        from suctionbench.objects.decompose import run_coacd
+        box = trimesh.creation.box()
+        run_coacd(box.vertices, box.faces, 0.05, 8)
+    """)
+    parent = subprocess.Popen([sys.executable, "-c", script], env=env)
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not started.exists() and parent.poll() is None:
+            time.sleep(0.05)
+        assert started.exists(), "the CoACD child did not start"
+        child = int(started.read_text())
+        assert child in child_pids(parent.pid) and alive(child)
+        parent.send_signal(signal.SIGKILL)
+        parent.wait()
+        left = wait_gone([child])
+    finally:
+        parent.kill()
+    for pid in left:  # clean up before failing
+        os.kill(pid, signal.SIGKILL)
+    assert not left, f"the CoACD child {left} outlived its parent by {ORPHAN_GRACE_S} s"
+
+
 @pytest.mark.slow
 def test_killed_eval_no_orphans_refused_report_then_resume_equals_a_full_run(tmp_path):
     """kill -9 of an eval with 2 workers after its first trial log: no worker survives, the run is

@@ -153,6 +153,35 @@ def test_messages_are_plain_text_not_markup():
     assert "[ray]" in assert_clean_exit_2(result, as_json=False)
 
 
+MARKUP = "[red]x[/]"
+"""A user string that rich would read as markup: a style, and a closing tag ('[/]' alone is a
+MarkupError: nothing to close)."""
+
+
+def test_tables_print_user_strings_literally(capsys):
+    """Titles, headers and cells of the human tables hold names, paths and policies as written."""
+    from suctionbench.cli.common import print_kv, print_rows
+
+    print_rows(f"objects in {MARKUP}", [{"key": f"user/{MARKUP}", "[bold]policy": "[/]", "path": "a[/]b"}])
+    print_kv(f"pick {MARKUP}", {"policy": MARKUP, "[/]": "[bold]"})
+    out = capsys.readouterr().out
+    for text in (f"objects in {MARKUP}", f"user/{MARKUP}", "[bold]policy", "a[/]b", f"pick {MARKUP}", "[bold]"):
+        assert text in out, text
+
+
+def test_label_prints_a_mesh_path_with_brackets_literally(tmp_path):
+    import trimesh
+
+    folder = tmp_path / "a[" / "]b[red]"  # the path reads '.../a[/]b[red]/box.stl'
+    folder.mkdir(parents=True)
+    mesh = folder / "box.stl"
+    trimesh.creation.box(extents=(0.06, 0.04, 0.02)).export(mesh)
+    result = runner.invoke(app, ["label", str(mesh), "--grasps", "4", "--samples", "2", "--top", "2",
+                                 "--mass", "0.1"])
+    assert result.exit_code == 0, result.stderr[-2000:]
+    assert f"labelsfor{mesh}" in "".join(result.stdout.split())  # the title wraps to the table's width
+
+
 def test_json_output_is_strict(capsys):
     emit({"q": float("-inf"), "a": np.float32("nan"), "v": np.array([1.0, np.inf]), "n": {"x": (float("nan"),)}},
          True)

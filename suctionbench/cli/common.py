@@ -112,7 +112,15 @@ app.add_typer(dataset_app, name="dataset")
 model_app = typer.Typer(no_args_is_help=True, help="Inspect trained GQ-CNN models.")
 app.add_typer(model_app, name="model")
 
-err = Console(stderr=True, soft_wrap=True)  # soft wrap: one error, one line
+err = Console(stderr=True, soft_wrap=True, markup=False)  # soft wrap: one error, one line
+"""Human output on stderr. No rich markup, here or in `console()`: what the commands print holds the
+user's strings (object names, paths, policy names), and '[red]' or '[/]' in them prints literally."""
+
+
+def console() -> Console:
+    """The console for human output on stdout (tables, summaries): markup off, like `err`."""
+    return Console(markup=False)
+
 
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object on the last stdout line.")]
 SeedOpt = Annotated[int, typer.Option("--seed", help="Seed of every random draw.")]
@@ -210,7 +218,7 @@ def print_kv(title: str, result: dict[str, Any]) -> None:
     table = Table(title=title, show_header=False)
     for key, value in result.items():
         table.add_row(key, f"{value:.4g}" if isinstance(value, float) else str(value))
-    Console().print(table)
+    console().print(table)
 
 
 def record_row(record: Any) -> dict[str, Any]:
@@ -237,4 +245,4 @@ def print_rows(title: str, rows: list[dict[str, Any]]) -> None:
             f"{v:.4g}" if isinstance(v, float) else ",".join(f"{x:.3g}" for x in v) if isinstance(v, list) else str(v)
             for v in row.values()
         ])
-    Console().print(table)
+    console().print(table)

@@ -6,9 +6,8 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from rich.console import Console
 
-from suctionbench.cli.common import JsonOpt, app, print_rows, progress_bar, resolve_workers, run_command
+from suctionbench.cli.common import JsonOpt, app, console, print_rows, progress_bar, resolve_workers, run_command
 from suctionbench.cli.plan import PolicyArgOpt
 from suctionbench.errors import InputError
 
@@ -79,7 +78,7 @@ def eval_cmd(
                      "prec%": pct(r["label_precision"]), "picks/h": r["picks_per_hour"],
                      "inv": r["invalid"]} for m, r in runs.items()]
             print_rows(f"eval {the_task.name}", rows)
-            Console().print("n: trials; AP%: average precision of q; succ%: success rate; "
+            console().print("n: trials; AP%: average precision of q; succ%: success rate; "
                             + ("acc%: accuracy of q > 0.5; rho: Spearman of q; " if known else "")
                             + "prec%: success among grasps labelled robust (rwr > 0.5); picks/h: picks per hour "
                             "(simulated motion + modelled compute); inv: invalid trials", highlight=False)
@@ -114,7 +113,7 @@ def report(
         if not as_json:
             for title, rows in result["tables"].items():
                 print_rows(title, rows)
-            Console().print(f"report -> {out / 'index.html'}")
+            console().print(f"report -> {out / 'index.html'}")
         return result
 
     run_command(as_json, body)

@@ -9,11 +9,10 @@ from typing import Annotated, Any
 
 import numpy as np
 import typer
-from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
-from suctionbench.cli.common import JsonOpt, SeedOpt, app, err, parse_vector, progress_bar, run_command
+from suctionbench.cli.common import JsonOpt, SeedOpt, app, console, err, parse_vector, progress_bar, run_command
 from suctionbench.errors import InputError
 from suctionbench.validate import MAX_GRASP_OFFSET, grasp_near_surface, label_memory, output_file, require_memory
 
@@ -119,15 +118,15 @@ def _print_record(record: dict[str, Any]) -> None:
         elif isinstance(value, list):
             value = ", ".join("-" if v is None else f"{v:.4g}" for v in value)
         table.add_row(key, str(value))
-    Console().print(table)
+    console().print(table)
 
 
 def _print_batch(labels: Any, summary: dict[str, Any], top: int, mesh: str) -> None:
-    console = Console()
+    screen = console()
     head = Table(title=f"labels for {mesh}", show_header=False)
     for key, value in summary.items():
         head.add_row(key, f"{value:.3f}" if isinstance(value, float) else str(value))
-    console.print(head)
+    screen.print(head)
     if top == 0:
         return
     order = np.lexsort((-labels.score("ss"), -labels.rwr))[:top]
@@ -146,4 +145,4 @@ def _print_batch(labels: Any, summary: dict[str, Any], top: int, mesh: str) -> N
             f"{labels.rwr[i]:.2f}",
             f"{labels.score('pc3d')[i]:.2f}",
         )
-    console.print(best)
+    screen.print(best)

@@ -7,12 +7,13 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from rich.console import Console
 from rich.table import Table
 
 from suctionbench.cli.common import (
     JsonOpt,
     SeedOpt,
+    console,
+    err,
     objects_app,
     print_kv,
     print_rows,
@@ -60,7 +61,7 @@ def objects_show(
                 if k == "stable_poses":
                     v = ", ".join(f"{p['probability']:.3f}" for p in v)
                 table.add_row(k, str(v))
-            Console().print(table)
+            console().print(table)
         return {"key": key, "directory": str(record.directory), **data}
 
     run_command(as_json, body)
@@ -164,7 +165,7 @@ def objects_import(
         if not as_json:
             print_rows("imported", [row])
             for note in repairs:
-                Console(stderr=True).print(f"repaired: {note}", highlight=False)
+                err.print(f"repaired: {note}", highlight=False)
         return {**row, "directory": str(record.directory), "scale": record.scale, "repairs": repairs}
 
     run_command(as_json, body)

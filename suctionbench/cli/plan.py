@@ -6,9 +6,8 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from rich.console import Console
 
-from suctionbench.cli.common import JsonOpt, SeedOpt, app, print_rows, run_command
+from suctionbench.cli.common import JsonOpt, SeedOpt, app, console, print_rows, run_command
 
 PolicyArgOpt = Annotated[
     list[str] | None,
@@ -53,19 +52,19 @@ def plan(
                             policy_args=parse_policy_args(policy_arg or []), model=model, seed=seed,
                             depth_scale=depth_scale, table_height=table_height, out=out)
         if not as_json:
-            console = Console()
+            screen = console()
             q = "nan" if result["q"] is None else f"{result['q']:.3f}"
-            console.print(f"grasp ({result['policy']}, {result['camera']}): q = {q}, pixel (u, v) = "
-                          f"({result['pixel'][0]:.0f}, {result['pixel'][1]:.0f})")
-            console.print(f"  point    (camera frame, m) = {_vector(result['point'])}")
-            console.print(f"  approach (camera frame)    = {_vector(result['approach'])}")
+            screen.print(f"grasp ({result['policy']}, {result['camera']}): q = {q}, pixel (u, v) = "
+                         f"({result['pixel'][0]:.0f}, {result['pixel'][1]:.0f})")
+            screen.print(f"  point    (camera frame, m) = {_vector(result['point'])}")
+            screen.print(f"  approach (camera frame)    = {_vector(result['approach'])}")
             plane = result["plane"]
             support = (f"fitted plane, normal {_vector(plane['normal'])}, {100 * plane['inlier_fraction']:.0f} % "
                        f"of the pixels" if plane else "the given camera pose")
-            console.print(f"  support: {support}; object pixels: {result['object_pixels']}; "
-                          f"{1000 * result['timings']['total']:.0f} ms")
+            screen.print(f"  support: {support}; object pixels: {result['object_pixels']}; "
+                         f"{1000 * result['timings']['total']:.0f} ms")
             if out is not None:
-                console.print(f"  drawn -> {out}")
+                screen.print(f"  drawn -> {out}")
         return result
 
     run_command(as_json, body)
@@ -100,7 +99,7 @@ def cameras(
                  "centre": f"{r['cx']:g},{r['cy']:g}", "fov": f"{r['hfov_deg']:g}x{r['vfov_deg']:g}",
                  "range": f"{r['min_depth']:g}-{r['max_depth']:g}"}
                 for r in rows])
-            Console().print("* default. Your camera: --camera FILE.toml; start from "
+            console().print("* default. Your camera: --camera FILE.toml; start from "
                             "suctionbench cameras --toml PRESET > FILE.toml")
         return {"cameras": rows}
 

@@ -190,14 +190,18 @@ def bench_generate(*, objects: str, datapoints: int, workers: int, seed: int) ->
     from suctionbench.geometry.sampling import sample_surface_grasps
     from suctionbench.objects.registry import resolve_objects
     from suctionbench.sensing.camera import CameraPoseConfig, camera_preset, sample_camera_pose
+    from suctionbench.validate import BYTES_PER_DATAPOINT, require_disk
 
     if datapoints < 1 or workers < 1:
         raise InputError("bench generate: need --datapoints >= 1 and --workers >= 1")
+    scratch = tempfile.gettempdir()  # both runs' datasets stay there until the end
+    require_disk(scratch, 2 * datapoints * BYTES_PER_DATAPOINT,
+                 f"--datapoints {datapoints} (two datasets in the temporary directory; TMPDIR sets another)")
     records = resolve_objects(objects)
     dirs, keys = [str(r.directory) for r in records], [r.key for r in records]
     config = GenerationConfig(datapoints=datapoints, seed=seed)
     rates = {}
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory(dir=scratch) as tmp:
         for label, count in (("parallel", workers), ("serial", 1)):
             start = time.perf_counter()
             card = generate_dataset(Path(tmp) / label, dirs, keys, "primesense", config, workers=count)

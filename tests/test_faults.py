@@ -196,6 +196,21 @@ def test_full_disk_is_an_input_error_naming_the_path(full_disk, box_mesh):
     assert sorted(p.name for p in full_disk.iterdir()) == ["filler"]  # no temporary file left
 
 
+def test_bench_generate_checks_the_disk_before_writing(full_disk, monkeypatch):
+    """bench generate writes two datasets in the temporary directory: a disk without room for them
+    is refused up front (exit 2, the path named), before any object is loaded or file written."""
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", str(full_disk))
+    result = runner.invoke(app, ["bench", "generate", "--objects", "basic", "--datapoints", "10", "--workers", "1",
+                                 "--json"])
+    assert result.exit_code == 2, result.stderr
+    error = json.loads(result.stdout.splitlines()[-1])["error"]
+    assert "--datapoints 10" in error and f"of disk under '{full_disk}'" in error, error
+    assert len(result.stderr.strip().splitlines()) == 1 and "Traceback" not in result.stderr
+    assert sorted(p.name for p in full_disk.iterdir()) == ["filler"]
+
+
 def test_report_on_a_full_disk_writes_nothing(full_disk, tmp_path):
     from fuzz_corpus import write_run
 

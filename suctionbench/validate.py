@@ -214,25 +214,43 @@ def _file_in_the_way(path: Path) -> Path | None:
     return None
 
 
+def _check_writable(path: Path, what: str, shown: Path) -> None:
+    """InputError if the nearest existing directory at or above `path`, where the output (and its
+    temporary file beside it) would be created, refuses writes: a read-only file system or no
+    permission. Checked without writing anything (access(2), which sees read-only mounts too)."""
+    directory = next((p for p in (path.absolute(), *path.absolute().parents) if p.is_dir()), None)
+    if directory is None or os.access(directory, os.W_OK | os.X_OK):
+        return
+    try:
+        read_only = bool(os.statvfs(directory).f_flag & os.ST_RDONLY)
+    except (OSError, AttributeError):
+        read_only = False
+    reason = "read-only file system" if read_only else "no permission"
+    raise InputError(f"{what} '{shown}': cannot write in '{directory}' ({reason}: write elsewhere)")
+
+
 def output_dir(path: str | Path, what: str) -> Path:
-    """`path` usable as an output directory: absent (creatable) or a directory."""
+    """`path` usable as an output directory: absent (creatable) or a directory, somewhere writable."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise InputError(f"{what} '{path}': exists and is not a directory")
     blocker = _file_in_the_way(path)
     if blocker is not None:
         raise InputError(f"{what} '{path}': '{blocker}' is a file, not a directory")
+    _check_writable(path, what, path)
     return path
 
 
 def output_file(path: str | Path, what: str) -> Path:
-    """`path` usable as an output file: not a directory, and no file where a parent directory must be."""
+    """`path` usable as an output file: not a directory, no file where a parent directory must be,
+    and a writable directory to create it in (outputs are written beside, then renamed)."""
     path = Path(path)
     if path.is_dir():
         raise InputError(f"{what} '{path}': is a directory, expected a file name")
     blocker = _file_in_the_way(path)
     if blocker is not None:
         raise InputError(f"{what} '{path}': '{blocker}' is a file, not a directory")
+    _check_writable(path.absolute().parent, what, path)
     return path
 
 

@@ -178,6 +178,27 @@ def full_disk(tmp_path):
 
 
 @pytest.fixture
+def read_only_dir(tmp_path):
+    """An empty directory nothing can be written in: a read-only tmpfs (root, Linux), else mode 0555
+    (which root ignores); skipped where neither holds."""
+    folder = tmp_path / "read_only"
+    folder.mkdir()
+    mounted = os.geteuid() == 0 and subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", "ro,size=64k", "tmpfs", str(folder)], capture_output=True).returncode == 0
+    if not mounted:
+        folder.chmod(0o555)
+    try:
+        if os.access(folder, os.W_OK):
+            pytest.skip("cannot make a read-only directory here")
+        yield folder
+    finally:
+        if mounted:
+            subprocess.run(["umount", "-l", str(folder)], check=False)
+        else:
+            folder.chmod(0o755)
+
+
+@pytest.fixture
 def box_mesh(tmp_path) -> Path:
     import trimesh
 
@@ -219,3 +240,26 @@ def test_report_on_a_full_disk_writes_nothing(full_disk, tmp_path):
     assert result.exit_code == 2, result.stderr
     assert "No space left" in json.loads(result.stdout.splitlines()[-1])["error"]
     assert sorted(p.name for p in full_disk.iterdir()) == ["filler"]  # all or nothing: no half report
+
+
+@pytest.mark.parametrize("name", ["episode.mcap", "runs/episode.mcap"])
+def test_pick_log_into_a_read_only_directory(read_only_dir, name):
+    """Refused before the episode runs: exit 2, one line naming --log and its path, nothing written."""
+    log = read_only_dir / name
+    result = runner.invoke(app, ["pick", "--object", "basic/box_tea", "--log", str(log), "--json"])
+    assert result.exit_code == 2, result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1 and "Traceback" not in result.stderr
+    error = json.loads(result.stdout.splitlines()[-1])["error"]
+    assert error.startswith(f"--log '{log}': cannot write in '{read_only_dir}'"), error
+    assert list(read_only_dir.iterdir()) == []
+
+
+def test_episode_log_errors_name_the_log_not_its_temporary_file(read_only_dir):
+    """The library's own error (a caller without the CLI's check) names the log's path."""
+    from suctionbench.runlog.writer import EpisodeLog
+
+    log = read_only_dir / "episode.mcap"
+    with pytest.raises(OSError) as info:
+        EpisodeLog(log, {"seed": 0})
+    assert info.value.filename == str(log) and info.value.errno in (errno.EROFS, errno.EACCES)
+    assert list(read_only_dir.iterdir()) == []

@@ -12,6 +12,7 @@ import typer
 from suctionbench.cli.common import JsonOpt, SeedOpt, app, parse_vector, print_kv, run_command
 from suctionbench.cli.plan import PolicyArgOpt
 from suctionbench.errors import InputError
+from suctionbench.validate import output_file
 
 
 @app.command()
@@ -43,6 +44,12 @@ def pick(
         from suctionbench.policies.plugins import parse_policy_args
         from suctionbench.sim.pick import PickRequest, PickRunner
 
+        if log is not None:  # the outputs before the episode: a refused one costs no simulation
+            if log.suffix != ".mcap":
+                raise InputError(f"--log '{log}': expected a .mcap file name")
+            output_file(log, "--log")
+        if render is not None:
+            output_file(render, "--render")
         values = None
         if grasp is not None:
             values = parse_vector(grasp, 6, "--grasp")
@@ -56,8 +63,6 @@ def pick(
             object_key, seed=seed, grasp=values, policy=policy, placement=placement, cup=cup_preset(cup),
             camera=camera, model=model, metric=metric, policy_args=parse_policy_args(policy_arg or []),
         )
-        if log is not None and log.suffix != ".mcap":
-            raise InputError(f"--log '{log}': expected a .mcap file name")
         result = PickRunner(request).run(render=render, log=log)
         if not as_json:
             print_kv(f"pick {object_key}", result)

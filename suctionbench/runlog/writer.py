@@ -241,12 +241,16 @@ class EpisodeLog:
         self.path = Path(path)
         # Serialise before touching the disk, so bad metadata leaves nothing behind.
         record, types = metadata_record(metadata)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
         self._tmp_path = self.path.with_name(f".{self.path.name}.{uuid.uuid4().hex[:8]}.part")
         self._schema_ids: dict[str, int] = {}
         self._channel_ids: dict[str, int] = {}
         self._sequence: dict[str, int] = {}
-        self._file: IO[bytes] | None = open(self._tmp_path, "xb")  # noqa: SIM115 (closed in close/abort)
+        self._file: IO[bytes] | None = None
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._file = open(self._tmp_path, "xb")  # noqa: SIM115 (closed in close/abort)
+        except OSError as exc:
+            raise self._named(exc) from None
         try:
             self._writer = Writer(self._file)
             self._writer.start(profile="", library=f"suctionbench {__version__}")
@@ -279,12 +283,23 @@ class EpisodeLog:
             self._writer.finish()
             self._file.flush()
             os.fsync(self._file.fileno())
+        except OSError as exc:
+            self.abort()
+            raise self._named(exc) from None
         except BaseException:
             self.abort()
             raise
         self._file.close()
         self._file = None
-        os.replace(self._tmp_path, self.path)
+        try:
+            os.replace(self._tmp_path, self.path)
+        except OSError as exc:
+            self._tmp_path.unlink(missing_ok=True)
+            raise self._named(exc) from None
+
+    def _named(self, exc: OSError) -> OSError:
+        """`exc` about the log's own path, not its hidden temp file (what the user named)."""
+        return type(exc)(exc.errno, exc.strerror, str(self.path)) if exc.errno else exc
 
     def abort(self) -> None:
         """Discard the episode: close and delete the temp file; `path` is left untouched."""
@@ -320,7 +335,10 @@ class EpisodeLog:
         sequence = self._sequence.get(topic, 0)
         self._sequence[topic] = sequence + 1
         data = json.dumps(jsonable(message), allow_nan=False, separators=(",", ":")).encode()
-        self._writer.add_message(channel_id, log_time=ns, data=data, publish_time=ns, sequence=sequence)
+        try:
+            self._writer.add_message(channel_id, log_time=ns, data=data, publish_time=ns, sequence=sequence)
+        except OSError as exc:  # a full disk while a chunk is flushed
+            raise self._named(exc) from None
 
     @staticmethod
     def _frame_transform(ns: int, child: str, world_from_child: Any) -> dict[str, Any]:

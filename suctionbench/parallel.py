@@ -1,10 +1,19 @@
 """Execution engines shared by dataset generation and evaluation: the same picklable task
 function over a list of argument tuples, results yielded in input order, on a local process pool
-or on Ray (an existing cluster via `address`, else a local one started for the call)."""
+or on Ray (an existing cluster via `address`, else a local one started for the call).
+
+A local Ray dies with the process that started it, kill -9 included: Ray ties its GCS, raylet and
+log monitor to that process (PR_SET_PDEATHSIG) and its workers exit with the raylet, but the
+raylet's agents (ray::DashboardAgent, ray::RuntimeEnvAgent) notice its death only after seconds
+and then wait on the dead GCS (seen alive well past 10 s). A small reaper process (`_RAY_REAPER`)
+kills every process of that Ray once the starting process ends."""
 
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
+import uuid
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from typing import Any
@@ -14,6 +23,65 @@ from suctionbench.lifeline import die_with_parent
 
 ENGINES = ("local", "ray")
 """Available execution engines."""
+
+RAY_SESSION_VAR = "SUCTIONBENCH_RAY_SESSION"
+"""Marks the processes of a local Ray started by `map_ordered`: set (to a fresh token) while
+ray.init starts them, so that the GCS, raylet and the processes they start inherit it."""
+
+RAY_REAPER_WAIT_S = 15.0
+"""How long a finished `map_ordered` waits for its reaper."""
+
+_RAY_REAPER = r"""
+import os, signal, sys, time
+marker, driver, me = sys.argv[1].encode(), int(sys.argv[2]), os.getpid()
+for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):  # outlive a Ctrl-C or hang-up to clean up after it
+    signal.signal(sig, signal.SIG_IGN)
+# One line per session directory, then end of file: the driver is done with Ray or has died (kill -9 too).
+sessions = tuple(os.path.join(line.decode().strip(), "") for line in sys.stdin.buffer if line.strip())
+
+def writes_into_session(pid):
+    for fd in os.listdir(f"/proc/{pid}/fd"):
+        try:
+            if os.readlink(f"/proc/{pid}/fd/{fd}").startswith(sessions):
+                with open(f"/proc/{pid}/fdinfo/{fd}") as fh:
+                    flags = next(int(l.split()[1], 8) for l in fh if l.startswith("flags:"))
+                if flags & 3:  # O_WRONLY or O_RDWR: a log of that session, kept open by a Ray process
+                    return True
+        except (OSError, StopIteration, ValueError):
+            pass
+    return False
+
+def ours(pid):
+    try:
+        with open(f"/proc/{pid}/environ", "rb") as fh:
+            if marker in fh.read().split(b"\0"):
+                return True
+        return bool(sessions) and writes_into_session(pid)
+    except OSError:
+        return False
+
+quiet, deadline = 0, time.monotonic() + 10
+while quiet < 3 and time.monotonic() < deadline:
+    found = 0
+    for name in os.listdir("/proc"):
+        if name.isdigit() and int(name) not in (me, driver) and ours(name):
+            try:
+                os.kill(int(name), signal.SIGKILL)
+                found += 1
+            except OSError:
+                pass
+    quiet = 0 if found else quiet + 1
+    time.sleep(0.1)
+"""
+"""Standard-library script of the reaper of a local Ray. Its stdin's write end is held by the
+driver only, so end of file comes when the driver closes it or dies, however it dies. Then it
+SIGKILLs, until a few scans in a row find none, every process (the driver excepted) that either
+carries the marker (NAME=token, its first argument) in its environment, or holds a file of one of
+the session directories the driver sent (a line each) open for writing. The second test is for the
+raylet's agents (ray::DashboardAgent, ray::RuntimeEnvAgent): the raylet starts them with an
+environment of its own making, and /proc/PID/environ of an agent lacked the marker in about one
+run of five, but they always keep their logs in the session directory open.
+Linux (/proc); elsewhere no reaper is started."""
 
 
 def check_engine(engine: str) -> None:
@@ -64,13 +132,62 @@ def map_ordered(
     except ImportError:
         raise InputError("--engine ray: Ray is not installed (pip install 'suctionbench[ray]')") from None
     started = not ray.is_initialized()
-    if started:
-        ray.init(address=address, num_cpus=None if address else workers, include_dashboard=False,
-                 log_to_driver=False, ignore_reinit_error=True)
+    reaper = None
     try:
+        if started:
+            local = address is None
+            if local:
+                token = uuid.uuid4().hex
+                reaper = _start_ray_reaper(f"{RAY_SESSION_VAR}={token}")
+                os.environ[RAY_SESSION_VAR] = token
+            try:
+                context = ray.init(address=address, num_cpus=None if address else workers, include_dashboard=False,
+                                   log_to_driver=False, ignore_reinit_error=True)
+            finally:
+                if local:
+                    os.environ.pop(RAY_SESSION_VAR, None)
+            if reaper is not None:
+                _tell_reaper(reaper, context.address_info.get("session_dir"))
         remote = ray.remote(fn)
         for ref in [remote.remote(*a) for a in args]:
             yield ray.get(ref)
     finally:
         if started:
             ray.shutdown()
+        if reaper is not None:
+            reaper.stdin.close()  # the reaper kills what is left of this Ray
+            try:
+                reaper.wait(timeout=RAY_REAPER_WAIT_S)
+            except subprocess.TimeoutExpired:
+                reaper.kill()
+                reaper.wait()
+
+
+def _start_ray_reaper(marker: str) -> subprocess.Popen | None:
+    """Start the reaper of a local Ray whose processes carry `marker` (NAME=token) in their environment.
+
+    Started before ray.init, from a process without the marker, so that a death during ray.init is
+    covered too (the marked processes; the agents once the session directory is sent). It gets no
+    signal of ours: the end of its stdin, closed by the kernel when this process dies however it
+    dies, starts its work.
+    """
+    if not os.path.isdir("/proc"):
+        return None
+    return subprocess.Popen([sys.executable, "-I", "-c", _RAY_REAPER, marker, str(os.getpid())],
+                            stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def _tell_reaper(reaper: subprocess.Popen, session_dir: str | None) -> None:
+    """Send the reaper the session directory of the Ray just started (see `_RAY_REAPER`).
+
+    Only that of a Ray this process started: ray.init without an address joins a running cluster
+    found through RAY_ADDRESS or `ray start`, whose processes are not ours to kill. Ray names the
+    session directory of a node it starts session_<time>_<pid of the starting process>.
+    """
+    if not session_dir or not os.path.basename(os.path.normpath(session_dir)).endswith(f"_{os.getpid()}"):
+        return
+    try:
+        reaper.stdin.write(os.fsencode(os.path.realpath(session_dir)) + b"\n")
+        reaper.stdin.flush()
+    except OSError:  # the reaper is gone: nothing to tell
+        pass

@@ -3,14 +3,18 @@ as incomplete meanwhile, a full disk is an input error naming the path with noth
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import textwrap
 import time
+import uuid
 from pathlib import Path
 
 import pytest
@@ -155,6 +159,98 @@ def test_killed_eval_no_orphans_refused_report_then_resume_equals_a_full_run(tmp
     a, b = (json.loads(r.stdout.splitlines()[-1]) for r in (resumed, fresh))
     keys = ("trials", "invalid", "success_rate", "ap", "outcomes", "per_object", "mean_motion_s")
     assert {k: a[k] for k in keys} == {k: b[k] for k in keys}
+
+
+RAY_MARKER = "SUCTIONBENCH_RAY_FAULT_TEST"
+"""Environment variable the Ray test gives its `generate`: the processes it starts inherit it."""
+
+RAY_ORPHAN_GRACE_S = 10.0
+"""How long a Ray process (GCS, raylet, agent, worker) may outlive its killed `generate`."""
+
+
+def holds_file_under(pid: int, prefix: str) -> bool:
+    for fd in Path(f"/proc/{pid}/fd").iterdir():
+        with contextlib.suppress(OSError):
+            if os.readlink(fd).startswith(prefix):
+                return True
+    return False
+
+
+def ray_pids(token: str, ray_tmp: str, exclude: int) -> list[int]:
+    """Live processes (`exclude` aside) with RAY_MARKER=token in their environment or a file under
+    `ray_tmp`, the test's own Ray directory, open: only processes the test's command started. Both
+    tests, since /proc may show a raylet agent's environment without the marker, and a process may
+    hold no file there."""
+    needle = f"{RAY_MARKER}={token}".encode()
+    prefix = os.path.join(os.path.realpath(ray_tmp), "")
+    pids = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit() or int(entry.name) == exclude:
+            continue
+        with contextlib.suppress(OSError):
+            pid = int(entry.name)
+            if (needle in (entry / "environ").read_bytes().split(b"\0") or holds_file_under(pid, prefix)) \
+                    and alive(pid):
+                pids.append(pid)
+    return pids
+
+
+def describe(pids: list[int]) -> str:
+    out = []
+    for pid in pids:
+        try:
+            cmdline = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+            out.append(f"{pid} {cmdline.strip()[:100]}")
+        except OSError:
+            out.append(f"{pid} (gone)")
+    return "; ".join(out)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_ray_generate_killed_leaves_no_orphans(tmp_path):
+    """kill -9 of `generate --engine ray` while its Ray tasks run: none of the processes its local Ray
+    started (GCS, raylet, its agents, workers) outlives it by RAY_ORPHAN_GRACE_S. They are found by a
+    marker in their environment or by their files in a Ray directory of the test's own, so no other
+    process on the machine is ever killed."""
+    pytest.importorskip("ray")
+    token = uuid.uuid4().hex
+    # Ray's files in a fresh directory of a short path (its socket paths must fit AF_UNIX's 107
+    # bytes, which pytest's tmp_path may not): no other Ray instance is found or touched.
+    ray_tmp = tempfile.mkdtemp(prefix="sbray", dir="/tmp")
+    env = {k: v for k, v in os.environ.items() if k != "RAY_ADDRESS"}
+    env.update({RAY_MARKER: token, "RAY_TMPDIR": ray_tmp, "RAY_USAGE_STATS_ENABLED": "0"})
+    cmd = [sys.executable, "-m", "suctionbench", "generate", "--objects", "basic", "--datapoints", "40",
+           "--engine", "ray", "--workers", "2", "--out", str(tmp_path / "ds"), "--json"]
+    log = tmp_path / "generate.log"
+    started: list[int] = []
+    with open(log, "wb") as fh:
+        parent = subprocess.Popen(cmd, env=env, stdout=fh, stderr=subprocess.STDOUT, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 240
+        running = False
+        while time.monotonic() < deadline and parent.poll() is None and not running:
+            time.sleep(0.2)
+            started = ray_pids(token, ray_tmp, parent.pid)
+            running = "ray::generate_unit" in describe(started)
+        assert running, f"no Ray task started (exit {parent.poll()}): {log.read_text()[-2000:]}"
+        assert "raylet" in describe(started), describe(started)
+        parent.send_signal(signal.SIGKILL)
+        parent.wait()
+        deadline = time.monotonic() + RAY_ORPHAN_GRACE_S
+        left = ray_pids(token, ray_tmp, parent.pid)
+        while left and time.monotonic() < deadline:
+            time.sleep(0.2)
+            left = ray_pids(token, ray_tmp, parent.pid)
+        report = describe(left)
+    finally:
+        parent.kill()
+        parent.wait()
+        for pid in ray_pids(token, ray_tmp, parent.pid):  # clean up before failing
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
+        shutil.rmtree(ray_tmp, ignore_errors=True)
+    assert not left, f"{len(left)} Ray processes outlived the killed generate by {RAY_ORPHAN_GRACE_S} s: {report}"
 
 
 @pytest.fixture

@@ -73,6 +73,15 @@ class CupConfig:
     the bellows' convolution takes over: how far the lip conforms to a curved surface. Cylinders of
     radius down to r^2 / (2 lip_travel) can be sealed."""
 
+    lip_fold_fraction: float = 0.5
+    """How far the full vacuum force V, pressing the lip evenly onto a flat face, folds it, as a
+    fraction of lip_travel: sets the lip's rate, `lip_rate` = V / (fraction x lip_travel) (7960 N/m
+    round the ring at 0.5). Half, because the ring-pressure model behind the tilt limit needs a lip
+    that stays elastic while one side unloads and the other takes the load; a lip the vacuum folds
+    flat onto its stop concentrates the load on its far edge instead. Both models read it: the
+    simulated lip points' springs and the labeller's preload from the surface shape under the ring
+    (contact/wrench.py, "Lip preload")."""
+
     stroke: float = 0.006
     """Axial travel of the bellows (m), 40 % of the cup height."""
 
@@ -126,6 +135,7 @@ class CupConfig:
             "seal_gap": 0.0 <= self.seal_gap < self.radius,
             "vacuum_switch_fraction": 0.0 < self.vacuum_switch_fraction < 1.0,
             "lip_travel": 0.0 < self.lip_travel < self.height,
+            "lip_fold_fraction": 0.0 < self.lip_fold_fraction <= 10.0,
             "stroke": 0.0 < self.stroke < self.height,
             "axial_stiffness": self.axial_stiffness > 0.0,
             "friction": 0.0 <= self.friction <= 10.0,
@@ -163,6 +173,13 @@ class CupConfig:
         wall carries the axial rate k spread evenly round its circumference resists a tilt theta
         with moment int (k / 2 pi r_m) (r_m theta cos phi) r_m cos phi r_m dphi = k r_m^2 theta / 2."""
         return 0.5 * self.axial_stiffness * self.effective_radius**2
+
+    @property
+    def lip_rate(self) -> float:
+        """Axial rate K (N/m) of the whole lip ring, spread evenly round it: the full vacuum force
+        folds a lip pressed evenly onto a flat face by lip_fold_fraction x lip_travel,
+        K = V / (lip_fold_fraction x lip_travel) (7960 N/m by default). Per radian of lip: K / 2 pi."""
+        return self.vacuum_force / (self.lip_fold_fraction * self.lip_travel)
 
     @property
     def approach_tolerance(self) -> float:

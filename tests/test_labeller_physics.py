@@ -138,8 +138,12 @@ def test_a_small_leak_seals_but_holds_less():
     # two: below the ~1 mm^2 threshold, so the cup seals, but the ejector's flow
     # Q_max (1 - p / p_max) (16 l/min free-air) must now balance the orifice flow
     # C_d A sqrt(2 p / rho) (C_d = 0.6, rho = 1.204 kg/m^3): solved here by bisection, p ~ 41 kPa,
-    # so V = p x pi (6.5 mm)^2 ~ 5.5 N and the payload falls from 0.81 kg to ~0.56 kg: a 0.45 kg
+    # so V = p x pi (6.5 mm)^2 ~ 5.5 N and the payload falls from 0.81 kg to ~0.56 kg: a 0.40 kg
     # box still hangs from it, a 0.65 kg one no longer does (it does from the unscratched face).
+    # The lip's preload (wrench.py, "Lip preload"): where it spans the scratch it lacks the fold of
+    # its sag, which the preload's pointwise closing of the 0.98 mm-spaced places overstates as at
+    # most (1.96 mm / 2)^2 / (2 x 14.1 mm) = 0.14 mm (the lip between two places either side):
+    # K x 0.14 mm = 1.1 N of the 5.5 - 0.40 g = 1.6 N the lip is left with.
     area = 2 * (0.002 * 0.00015 - (4 / 3) * 0.001**3 / (2 * CUP.min_seal_radius))
     assert area == pytest.approx(0.51e-6, abs=0.01e-6)
     q_max, p_max = CUP.ejector_flow, CUP.vacuum_pressure
@@ -157,8 +161,9 @@ def test_a_small_leak_seals_but_holds_less():
     assert seal.seal[0]
     assert seal.leak_area[0] == pytest.approx(area, rel=0.15)  # 48 places 0.98 mm apart
     assert seal.vacuum_force[0] == pytest.approx(v_leak, rel=0.05)
-    assert 0.45 * G < 0.9 * v_leak < 1.1 * v_leak < 0.65 * G < CUP.vacuum_force
-    assert SuctionLabeller(mesh, mass=0.45).wrench_resistance([[0, 0, 0.02]], DOWN)[0]
+    assert 0.40 * G < 0.9 * v_leak < 1.1 * v_leak < 0.65 * G < CUP.vacuum_force
+    assert CUP.lip_rate * 0.14e-3 < 0.95 * v_leak - 0.40 * G  # the labeller's V is within 5 %
+    assert SuctionLabeller(mesh, mass=0.40).wrench_resistance([[0, 0, 0.02]], DOWN)[0]
     assert not SuctionLabeller(mesh, mass=0.65).wrench_resistance([[0, 0, 0.02]], DOWN)[0]
     assert SuctionLabeller(box((0.12, 0.08, 0.04)), mass=0.65).wrench_resistance([[0, 0, 0.02]], DOWN)[0]
 

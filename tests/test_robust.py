@@ -104,7 +104,7 @@ def test_robust_label_is_the_composition_of_its_parts(soap):
     assert samples.loads.shape == (len(samples.points), 1, 3)  # no inertial load by default
     load = bellows_swing(samples.force, samples.com, seal.ring_centre, samples.frames, labeller.config.cup)
     wrench = external_wrench_at_contact(load, samples.com, seal.ring_centre, samples.frames)
-    resisted = resists(wrench, samples.friction, labeller.config.cup, seal.vacuum_force)
+    resisted = resists(wrench, samples.friction, labeller.config.cup, seal.vacuum_force, seal.lip_heights)
     composed = (seal.seal & resisted).reshape(outcomes.shape)
     np.testing.assert_array_equal(outcomes, composed)
     np.testing.assert_array_equal(rwr, composed.mean(axis=1))

@@ -91,7 +91,7 @@ class SuctionLabeller:
         for case in range(loads.shape[1]):
             load = bellows_swing(loads[:, case], com, seal.ring_centre, frames, self.config.cup)
             wrench = external_wrench_at_contact(load, com, seal.ring_centre, frames)
-            ok &= resists(wrench, self.config.cup.friction, self.config.cup, seal.vacuum_force)
+            ok &= resists(wrench, self.config.cup.friction, self.config.cup, seal.vacuum_force, seal.lip_heights)
         return ok
 
     def robust(

@@ -193,12 +193,15 @@ def _wrench_gate(loads: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.
     """The closed-form wrench test of every load case as a seal-model gate: it only needs the ring
     centres and the vacuum force (resistance only grows with V, as the gate must)."""
 
-    def gate(idx: np.ndarray, centres: np.ndarray, vacuum: np.ndarray) -> np.ndarray:
+    def gate(
+        idx: np.ndarray, centres: np.ndarray, vacuum: np.ndarray,
+        lip_heights: np.ndarray | None = None, rim_bound: bool = False,
+    ) -> np.ndarray:
         ok = np.ones(len(idx), dtype=bool)
         for case in range(loads.shape[1]):
             load = bellows_swing(loads[idx, case], com[idx], centres, frames[idx], cup)
             wrench = external_wrench_at_contact(load, com[idx], centres, frames[idx])
-            ok &= resists(wrench, mu[idx], cup, vacuum)
+            ok &= resists(wrench, mu[idx], cup, vacuum, lip_heights, rim_bound=rim_bound)
         return ok
 
     return gate
@@ -221,6 +224,7 @@ def evaluate_samples_reference(seal: SealModel, samples: GraspSamples) -> np.nda
             resists_qp(
                 load, samples.com[i], centre, frame, float(samples.friction[i]),
                 seal.cup, vacuum_force=float(result.vacuum_force[0]),
+                lip_heights=None if result.lip_heights is None else result.lip_heights[0],
             )[0]
             for load in swung
         )

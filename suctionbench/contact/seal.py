@@ -96,10 +96,13 @@ lip leaks it usually also stretches (over an edge), and the leak is what loses t
 
 RING_OFF_SURFACE, HOLE, CONE_COLLISION, LEAK, TILT, STRETCH = 1, 2, 3, 4, 5, 6
 
-Gate = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
-"""gate(indices, ring_centres, vacuum_forces) -> bool mask: a cheap test (the wrench test) that
-lets later ray casts be skipped. It must be monotone in the vacuum force: the lip model first asks
-it with the full vacuum, before the leak is known, then again with the vacuum the seal holds."""
+Gate = Callable[..., np.ndarray]
+"""gate(indices, ring_centres, vacuum_forces, lip_heights=None, rim_bound=False) -> bool mask: a
+cheap test (the wrench test, `wrench.resists`) that lets later ray casts be skipped. The lip model
+asks it twice: first with the full vacuum and `rim_bound=True`, before the leak and the lip's
+profile are known (a necessary condition: what no vacuum or preload could resist is not
+resisted), then with the vacuum the seal holds and the lip's profile heights (the exact test).
+The spring model asks it once, with the full vacuum and no profile."""
 
 
 @dataclass
@@ -155,6 +158,11 @@ class SealResult:
     vacuum_force: np.ndarray
     """Vacuum force V (N) the seal holds: the ejector's equilibrium against the leak (the spring
     model: the cup's constant V). The wrench test's V."""
+
+    lip_heights: np.ndarray | None = None
+    """(N, K) the profile the lip rests on, relative to its bellows plane (m, zero mean and first
+    harmonic, positive away from the cup) at the K lip places `wrench.lip_angles(K)`: sets the lip's
+    preload in the wrench test (NaN where the lip was not measured). None for the spring model."""
 
     @property
     def failure_names(self) -> list[str | None]:
@@ -251,15 +259,7 @@ class SealModel:
         coef = depth @ self.lip_fit
         relative = depth - coef @ self.lip_basis.T
         height = -relative  # toward the cup; the rolled disc comes from above
-        k, w = height.shape[1], int(self.bend_offsets[-1])
-        wrapped = np.concatenate([height[:, k - w :], height, height[:, :w]], axis=1)  # round the circle
-        rest = np.full_like(height, -np.inf)
-        for o, rise in zip(self.bend_offsets, self.bend_rise_cell, strict=True):
-            np.maximum(rest, wrapped[:, w + o : w + o + k] - rise, out=rest)  # lowest resting disc at y
-        wrapped = np.concatenate([rest[:, k - w :], rest, rest[:, :w]], axis=1)
-        lip = np.full_like(height, np.inf)
-        for o, rise in zip(self.bend_offsets, self.bend_rise, strict=True):
-            np.minimum(lip, wrapped[:, w + o : w + o + k] + rise, out=lip)  # envelope of the discs
+        lip = self._closing(height, self.bend_rise_cell)
         correction = -lip @ self.lip_fit
         coef = coef + correction
         e = -lip - correction @ self.lip_basis.T  # the bridged profile relative to the end plane
@@ -274,7 +274,31 @@ class SealModel:
         rise = np.diff(np.concatenate([fold, fold[:, :1]], axis=1), axis=1)
         length = np.sqrt(self.lip_chord**2 + rise**2).reshape(len(depth), self.cup.n_vertices, -1).sum(axis=2)
         stretch = np.abs(length / (self.lip_per_edge * self.lip_chord) - 1.0).max(axis=1)
-        return {"bridged": bridged, "resting": resting, "gap": gap, "leak": leak, "tilt": tilt, "stretch": stretch}
+        # The preload's profile: the same closing with each place a point, not a cell. The cells
+        # keep a 2 mm groove from looking wider than it is (the leak), but on a slope they lift
+        # the lip by up to slope x spacing / 2 (0.06 mm at 45 deg on a 30 mm cylinder), which
+        # would shift the whole profile's mean; with points a slope whose curvature the lip
+        # follows (< 1 / R_min) closes to itself.
+        pointwise = self._closing(height, self.bend_rise)
+        heights = -pointwise + (pointwise @ self.lip_fit) @ self.lip_basis.T
+        return {"bridged": bridged, "resting": resting, "gap": gap, "leak": leak, "tilt": tilt,
+                "stretch": stretch, "heights": heights}
+
+    def _closing(self, height: np.ndarray, rest_rise: np.ndarray) -> np.ndarray:
+        """Morphological closing of `height` (S, K) (toward the cup) round the lip by the disc of
+        radius R_min rolled from the cup's side (module doc, item 2): the lowest each disc rests
+        on the places, `rest_rise` its rise at each offset (cells or points), then the envelope of
+        the discs."""
+        k, w = height.shape[1], int(self.bend_offsets[-1])
+        wrapped = np.concatenate([height[:, k - w :], height, height[:, :w]], axis=1)  # round the circle
+        rest = np.full_like(height, -np.inf)
+        for o, rise in zip(self.bend_offsets, rest_rise, strict=True):
+            np.maximum(rest, wrapped[:, w + o : w + o + k] - rise, out=rest)  # lowest resting disc at y
+        wrapped = np.concatenate([rest[:, k - w :], rest, rest[:, :w]], axis=1)
+        lip = np.full_like(height, np.inf)
+        for o, rise in zip(self.bend_offsets, self.bend_rise, strict=True):
+            np.minimum(lip, wrapped[:, w + o : w + o + k] + rise, out=lip)  # envelope of the discs
+        return lip
 
     # -- the model ---------------------------------------------------------------------------
     def evaluate(self, points: np.ndarray, frames: np.ndarray, gate: Gate | None = None):
@@ -316,7 +340,7 @@ class SealModel:
         if staged:  # a wrench the full vacuum cannot resist is not resisted with less
             alive &= ~hole
             idx = np.flatnonzero(alive)
-            ok = gate(idx, ring_centre[idx], full_vacuum[idx])
+            ok = gate(idx, ring_centre[idx], full_vacuum[idx], rim_bound=self.lip)
             if not self.lip:
                 ok &= np.maximum(flexion, cone)[idx] <= cup.stretch_limit
             alive[idx] = ok
@@ -324,7 +348,9 @@ class SealModel:
         # Stage B: the perimeter (springs: chord paths; lip: the lip circle, gap, leak, vacuum).
         idx = np.flatnonzero(alive) if staged else np.arange(count)
         if self.lip:
-            perimeter, d_per, tilt, leak, vacuum, resting = self._lip_stage(points, frames, idx, d_vert, ring_off, hole)
+            perimeter, d_per, tilt, leak, vacuum, resting, heights = self._lip_stage(
+                points, frames, idx, d_vert, ring_off, hole
+            )
             # the cup body ends where the lip rests (it spans what it bridges), not in a groove
             rim = np.where(np.isfinite(resting), resting, d_vert)
             apex = np.minimum(rim.mean(axis=1) - cup.height, d_axis)  # the body stands on the lip
@@ -338,6 +364,7 @@ class SealModel:
             tilt = np.full(count, np.nan)
             leak = np.zeros(count)
             vacuum = full_vacuum
+            heights = None
             tilt_fail = leak_fail = np.zeros(count, dtype=bool)
             max_stretch = np.maximum(perimeter, np.maximum(flexion, cone))
             stretch_fail = ~(max_stretch <= cup.stretch_limit)
@@ -347,7 +374,7 @@ class SealModel:
             alive &= ~ring_off & ~hole & ~stretch_fail & ~tilt_fail & ~leak_fail
             if self.lip:  # now with the vacuum the seal holds
                 idx = np.flatnonzero(alive)
-                alive[idx] = gate(idx, ring_centre[idx], vacuum[idx])
+                alive[idx] = gate(idx, ring_centre[idx], vacuum[idx], lip_heights=heights[idx])
 
         # Stage C: probes inside the ring for holes and cone-face collisions.
         idx = np.flatnonzero(alive) if staged else np.arange(count)
@@ -394,6 +421,7 @@ class SealModel:
             tilt=tilt,
             leak_area=leak,
             vacuum_force=vacuum,
+            lip_heights=heights,
         )
 
     def _chord_stage(self, points, frames, idx, d_vert, ring_off, hole):
@@ -417,14 +445,16 @@ class SealModel:
     def _lip_stage(self, points, frames, idx, d_vert, ring_off, hole):
         """The lip circle: cast its non-vertex places, then `lip_profile` where all of it landed.
         Updates ring_off / hole in place; returns (lip stretch, depths, tilt, leak area, vacuum
-        force, resting depth of the lip at the n vertex bearings), inf / NaN / inf / 0 / inf where
-        the lip is not (all) on the surface."""
+        force, resting depth of the lip at the n vertex bearings, the lip's profile heights relative
+        to its bellows plane), inf / NaN / inf / 0 / inf / NaN where the lip is not (all) on the
+        surface."""
         count = len(points)
         stretch = np.full(count, np.inf)
         tilt = np.full(count, np.nan)
         leak = np.full(count, np.inf)
         d_lip = np.full((count, len(self.lip_xy)), np.inf)
         resting = np.full((count, self.cup.n_vertices), np.inf)
+        heights = np.full((count, len(self.lip_xy)), np.nan)
         if len(idx):
             d_new, back_new = self._depths(points[idx], frames[idx], self.lip_xy[~self.lip_vertex])
             d_lip[np.ix_(idx, np.flatnonzero(~self.lip_vertex))] = d_new
@@ -436,7 +466,8 @@ class SealModel:
                 lip = self.lip_profile(d_lip[on])
                 stretch[on], tilt[on], leak[on] = lip["stretch"], lip["tilt"], lip["leak"]
                 resting[on] = lip["resting"][:, self.lip_vertex]
+                heights[on] = lip["heights"]
         measured = np.isfinite(leak)
         vacuum = np.zeros(count)
         vacuum[measured] = vacuum_force(leak[measured], self.cup)
-        return stretch, d_lip, tilt, leak, vacuum, resting
+        return stretch, d_lip, tilt, leak, vacuum, resting, heights

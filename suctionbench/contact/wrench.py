@@ -9,6 +9,7 @@ tight seal, less when the lip leaks: see seal.py and suctionbench.vacuum). The a
 
     friction   sqrt(3)|f_x| <= mu f_N,  sqrt(3)|f_y| <= mu f_N,  sqrt(3)|tau_z| <= r mu f_N
     tilt       ||(tau_x, tau_y)|| <= r f_N / 2                     (ring pressure, default)
+               f_N + (2/r)(tau_x sin t_k - tau_y cos t_k) >= K z_k (the lip's preload, below)
                sqrt(2)|tau_x|, sqrt(2)|tau_y| <= pi r kappa         (the paper's box, cup.kappa set)
     suction    f_z >= -V
 
@@ -23,7 +24,30 @@ lip stays on iff sqrt(p_x^2 + p_y^2) <= p0, i.e.
     ||(tau_x, tau_y)|| = pi r sqrt(p_x^2 + p_y^2) <= pi r p0 = r (V + f_z) / 2.
 
 One circle (a second-order cone in alpha), shrinking to nothing as an axial load pulls the lip off
-(f_z -> -V); where it is violated, one side of the lip lifts and the seal peels open. The paper
+(f_z -> -V); where it is violated, one side of the lip lifts and the seal peels open.
+
+Lip preload (the physical lip, cup.seal_model = "lip"). The circle assumes the lip starts evenly
+pressed: true on a flat face, not on a curved one. The lip is a ring of springs of rate
+K / 2 pi per radian (K = cup.lip_rate) between the bellows' end plane and the surface it rests on
+(seal.py: the bridged profile). The plane settles where the springs have no net moment, i.e. it
+takes the profile's mean and first harmonic, so the lip's pressure is
+
+    p(theta) = p0 + p_x cos(theta) + p_y sin(theta) - (K / 2 pi) z(theta),
+
+z the profile relative to that plane (zero mean, zero first harmonic, positive away from the cup:
+less fold, less pressure). z has no first harmonic, so the resultant and the moment are those of
+the first three terms as before (2 pi p0 = V + f_z, tau = pi r (p_y, -p_x)), and p(theta_k) >= 0 at
+the seal model's K places theta_k = 2 pi k / K (from the contact frame's x axis) reads
+
+    (V + f_z) + (2 / r) (tau_x sin(theta_k) - tau_y cos(theta_k)) >= K z_k,
+
+K linear half-spaces in alpha that replace the circle (on a flat face, z = 0, they are the
+K-gon circumscribing it: 0.2 % wider between places at K = 48). On a cylinder of radius R lying on
+its side the profile is z = -(r^2 / 4 R) cos(2 theta): its flanks (z > 0) start with less
+pressure, so an axial pull opens them first, at V + f_z = K r^2 / 4 R, i.e. the smallest cylinder
+the lip holds under a pull grows from R_min = r^2 / (2 lip_travel) (no load, fold fraction 1/2)
+to R_min V / (V + f_z); and a moment that lifts a flank peels it sooner, one that lifts the
+cylinder's axis-wise sides (z < 0, extra preload) later than the circle says. The paper
 instead bounds ||tau|| by a material constant, pi r kappa, relaxed to a sqrt(2) box to stay
 linear; the `paper` preset keeps that box (cup.kappa set). Friction and torsion are the paper's
 inscribed sqrt(3) box of the friction limit surface.
@@ -162,15 +186,41 @@ def bellows_swing(
     return np.einsum("nij,nj->ni", frames, swung)
 
 
+def lip_angles(count: int) -> np.ndarray:
+    """Bearings theta_k = 2 pi k / count (rad, from the contact frame's x axis) of the lip places
+    whose profile heights `resists` takes (the seal model's lip samples)."""
+    return 2.0 * np.pi * np.arange(count) / count
+
+
+def lip_rows(lip_heights: np.ndarray, cup: CupConfig) -> tuple[np.ndarray, np.ndarray]:
+    """The lip-preload half-spaces of one grasp as A alpha <= b (module doc, "Lip preload"):
+    -(f_z) - (2 / r)(tau_x sin theta_k - tau_y cos theta_k) <= V - K z_k, one row per place, with V
+    left out of b (the caller adds the vacuum the seal holds)."""
+    theta = lip_angles(len(lip_heights))
+    rows = np.zeros((len(theta), 6))
+    rows[:, 2] = -1.0
+    rows[:, 3] = -(2.0 / cup.radius) * np.sin(theta)
+    rows[:, 4] = (2.0 / cup.radius) * np.cos(theta)
+    return rows, -cup.lip_rate * np.asarray(lip_heights, dtype=float)
+
+
 def resists(
     wrench_contact: np.ndarray,
     mu: np.ndarray | float,
     cup: CupConfig,
     vacuum_force: np.ndarray | float | None = None,
+    lip_heights: np.ndarray | None = None,
+    *,
+    rim_bound: bool = False,
 ) -> np.ndarray:
     """Closed-form wrench resistance: does alpha* = -w lie in F? Vectorised over rows of w.
 
     `vacuum_force` (scalar or one per row) is the V the seal holds; default the cup's full V.
+    `lip_heights` (rows, K): the lip's profile relative to its bellows plane at the K places
+    `lip_angles(K)` (seal.py); with it the tilt limit is the lip-preload half-spaces (module doc),
+    without it the circle of an evenly pressed lip. `rim_bound`: the profile is not measured yet
+    (the seal model's first, cheap stage), so test only what every preload implies: a lip pushing
+    nowhere but at its rim, ||tau|| <= r f_N (p >= 0 with resultant f_N concentrated at one point).
     """
     a = -np.asarray(wrench_contact, dtype=float)
     mu = np.asarray(mu, dtype=float)
@@ -181,7 +231,16 @@ def resists(
     ok &= SQRT3 * np.abs(a[:, 0]) <= mu * (f_n + eps * v)
     ok &= SQRT3 * np.abs(a[:, 1]) <= mu * (f_n + eps * v)
     ok &= SQRT3 * np.abs(a[:, 5]) <= r * mu * (f_n + eps * v)
-    if cup.kappa is None:
+    if cup.kappa is None and rim_bound:
+        ok &= np.hypot(a[:, 3], a[:, 4]) <= r * (f_n + eps * v)
+    elif cup.kappa is None and lip_heights is not None:
+        heights = np.asarray(lip_heights, dtype=float)
+        theta = lip_angles(heights.shape[1])
+        pressure = f_n[:, None] + (2.0 / r) * (
+            a[:, 3, None] * np.sin(theta)[None] - a[:, 4, None] * np.cos(theta)[None]
+        )
+        ok &= (pressure >= cup.lip_rate * heights - eps * np.atleast_1d(v)[:, None]).all(axis=1)
+    elif cup.kappa is None:
         ok &= np.hypot(a[:, 3], a[:, 4]) <= 0.5 * r * (f_n + eps * v)
     else:
         tilt = math.pi * r * cup.kappa
@@ -240,8 +299,12 @@ def resists_qp(
     mu: float,
     cup: CupConfig,
     vacuum_force: float | None = None,
+    lip_heights: np.ndarray | None = None,
 ) -> tuple[bool, float]:
     """Reference: solve min_{alpha in F} ||D (G alpha + w)||^2 with Clarabel for one grasp.
+
+    With `lip_heights` (K,) the tilt limit is the lip-preload half-spaces (`lip_rows`), linear rows
+    of the non-negative cone in place of the ring's second-order cone.
 
     Everything in the object frame (w about the object origin); D makes the residual
     dimensionless (see QP_RESIDUAL_TOL). The friction, suction and box rows are Clarabel's
@@ -263,7 +326,10 @@ def resists_qp(
     m = scale[:, None] * grasp_map(ring_centre, frame)
     c = scale * w
     a_lin, b_lin = constraint_matrix(mu, cup, v)
-    ring = cup.kappa is None
+    ring = cup.kappa is None and lip_heights is None
+    if cup.kappa is None and lip_heights is not None:
+        a_lip, b_lip = lip_rows(lip_heights, cup)
+        a_lin, b_lin = np.vstack([a_lin, a_lip]), np.concatenate([b_lin, b_lip + v])
     a_all, b_all = a_lin, b_lin
     cones = [clarabel.NonnegativeConeT(len(b_lin))]
     if ring:

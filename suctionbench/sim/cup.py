@@ -107,11 +107,6 @@ class SimCupConfig:
     lip_damping_ratio: float = 1.0
     """Damping of each lip point's fold, as a fraction of critical (lossy silicone: no ringing)."""
 
-    lip_fold_fraction: float = 0.5
-    """How far the full vacuum force V, pressing the lip evenly onto a flat face, folds it, as a
-    fraction of lip_travel; sets the lip's rate, V / (fraction x lip_travel) = 7960 N/m for the
-    default cup at 0.5."""
-
     lip_mass: float = 0.004
     """Mass of the whole lip (kg), shared by its points: a few grams of silicone."""
 
@@ -194,9 +189,9 @@ class SimCupConfig:
         return cls(compliant=False, lip_points=8)
 
     def lip_point_stiffness(self, cup: CupConfig) -> float:
-        """Fold stiffness (N/m) of one lip point: the ring's rate V / (lip_fold_fraction x lip_travel)
-        shared by the points."""
-        return cup.vacuum_force / (self.lip_fold_fraction * cup.lip_travel) / self.lip_points
+        """Fold stiffness (N/m) of one lip point: the ring's rate `cup.lip_rate`
+        (V / (lip_fold_fraction x lip_travel)) shared by the points."""
+        return cup.lip_rate / self.lip_points
 
 
 SIM_CUP_DEFAULT = SimCupConfig()

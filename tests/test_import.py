@@ -431,3 +431,116 @@ def test_cli_import_takes_units_and_scale_and_reports_repairs(corpus, tmp_path):
     garbage = runner.invoke(app, ["objects", "import", str(corpus["garbage.obj"].path), *root])
     error = json.loads(garbage.stdout.strip().splitlines()[-1])["error"]
     assert garbage.exit_code == 2 and "not a readable mesh (format obj" in error and "charset" not in error
+
+
+# -- pieces a few micrometres apart, crumbs, sealed voids, pinches ---------------------------------
+
+
+def _solid(mesh: trimesh.Trimesh):
+    from suctionbench.objects.repair import solidify
+
+    return solidify(mesh, source="test")
+
+
+def test_convex_pieces_a_few_micrometres_apart_are_joined(tmp_path):
+    """A V-HACD-style decomposition written as one OBJ: convex pieces meant to touch, 5 um apart."""
+    pieces = [_box((0.04, 0.03, 0.02)), _box((0.02, 0.03, 0.02), (0.03 + 5e-6, 0.0, 0.0))]
+    pieces.append(_box((0.04, 0.03, 0.01), (0.01, 0.0, 0.015 + 3e-6)))
+    both = trimesh.util.concatenate(pieces)
+    path = tmp_path / "vhacd.obj"
+    path.write_text(_obj_text(both.vertices, both.faces, [np.arange(12 * k, 12 * k + 12) for k in range(3)]))
+    record = import_mesh(path, set_name="corpus", name="vhacd", root=tmp_path / "objs")
+    assert any(re.search(r"3 gaps of up to 0.005 mm between pieces closed", n) for n in record.params["repairs"])
+    expected = 0.04 * 0.03 * 0.02 + 0.02 * 0.03 * 0.02 + 0.04 * 0.03 * 0.01
+    assert record.volume == pytest.approx(expected, rel=2e-3)
+    mesh = record.mesh()
+    assert mesh.is_watertight and len(mesh.split(only_watertight=False)) == 1
+
+
+def test_a_gap_wider_than_the_tolerance_is_two_bodies():
+    from suctionbench.objects.repair import GAP_MAX
+
+    size = 0.06
+    apart = 3 * GAP_MAX * size  # 0.18 mm: a real gap, not a numerical one
+    mesh = trimesh.util.concatenate([_box((0.03, 0.03, 0.03)), _box((0.03, 0.03, 0.03), (0.03 + apart, 0, 0))])
+    with pytest.raises(InputError, match=r"2 disconnected bodies \(.*the nearest 0.18 mm apart\)"):
+        _solid(mesh)
+
+
+def test_loose_crumbs_are_dropped_but_a_second_object_is_not():
+    from suctionbench.objects.repair import LOOSE_MAX
+
+    main = _box((0.05, 0.04, 0.03))
+    crumb = _box((0.004,) * 3, (0.06, 0.0, 0.0))  # 0.1 % of the volume, 33 mm away
+    solid = _solid(trimesh.util.concatenate([main, crumb]))
+    assert solid.mesh.volume == pytest.approx(main.volume)
+    assert any("1 loose piece dropped (0.11% of the volume" in note for note in solid.notes), solid.notes
+    side = (LOOSE_MAX * 2 * main.volume) ** (1 / 3)  # twice the share that counts as crumbs
+    with pytest.raises(InputError, match="2 disconnected bodies"):
+        _solid(trimesh.util.concatenate([main, _box((side,) * 3, (0.06, 0.0, 0.0))]))
+
+
+def _walls(outer: float, wall: float) -> trimesh.Trimesh:
+    """Six overlapping slabs making a closed box of side `outer` with walls `wall` thick: their union
+    encloses a sealed cubic void of side outer - 2 wall."""
+    slabs = []
+    for axis in range(3):
+        for sign in (-1, 1):
+            extents = [outer] * 3
+            extents[axis] = wall
+            offset = [0.0] * 3
+            offset[axis] = sign * (outer - wall) / 2
+            slabs.append(_box(extents, offset))
+    return trimesh.util.concatenate(slabs)
+
+
+def test_a_small_void_between_united_pieces_is_filled_a_large_one_is_named():
+    solid = _solid(_walls(0.05, 0.023))  # a 4 mm void in a 50 mm block: 0.05 %
+    assert solid.mesh.volume == pytest.approx(0.05**3, rel=1e-6)
+    assert len(solid.mesh.split(only_watertight=False)) == 1
+    assert any("1 sealed void between united pieces filled (0.05% of the volume)" in n for n in solid.notes)
+    with pytest.raises(InputError, match=r"hollow: 1 sealed inner cavity of .*% of its volume"):
+        _solid(_walls(0.05, 0.005))
+
+
+def test_pieces_touching_along_an_edge_stay_closed_when_vertices_are_merged():
+    """Two boxes that share only an edge: united, the edge's vertices appear twice (one per box); every
+    later reader merges vertices by position, which made the edge non-manifold (4 faces)."""
+    from suctionbench.objects.repair import unpinch
+
+    mesh = trimesh.util.concatenate([_box((0.02,) * 3), _box((0.02,) * 3, (0.02, 0.02, 0.0))])
+    solid = _solid(mesh)
+    merged = solid.mesh.copy()
+    merged.merge_vertices()
+    assert merged.is_watertight and merged.is_winding_consistent
+    assert merged.volume == pytest.approx(2 * 0.02**3, rel=1e-3)
+    # unpinch itself: a closed mesh with the shared edge's vertices doubled
+    pinched = trimesh.util.concatenate([_box((0.02,) * 3), _box((0.02,) * 3, (0.02, 0.02, 0.0))])
+    assert not _merged_watertight(pinched)
+    assert _merged_watertight(unpinch(pinched))
+    assert unpinch(_box((0.02,) * 3)).vertices.tolist() == _box((0.02,) * 3).vertices.tolist()
+
+
+def _merged_watertight(mesh: trimesh.Trimesh) -> bool:
+    merged = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
+    merged.merge_vertices()
+    return bool(merged.is_watertight)
+
+
+@pytest.mark.slow
+def test_pybullet_random_objects_and_vhacd_meshes_import(tmp_path):
+    """pybullet's random grasping objects and V-HACD collision meshes (convex pieces micrometres
+    apart): every one is one closed solid after repair (before gaps were closed: 0 of 25)."""
+    pybullet_data = pytest.importorskip("pybullet_data", reason="pip install pybullet (the mesh corpus extra)")
+    from suctionbench.geometry.mesh import load_mesh
+    from suctionbench.objects.repair import solidify
+
+    root = Path(pybullet_data.getDataPath())
+    meshes = [(root / "random_urdfs" / f"{i:03d}" / f"{i:03d}.obj", 0.015) for i in range(0, 1000, 50)]
+    meshes += [(root / "duck_vhacd.obj", 0.05), (root / "laikago" / "upper_leg_left_vhacd.obj", 1.0)]
+    meshes += [(p, 1.0) for p in sorted((root / "xarm").rglob("link[2-4]_vhacd*.obj"))]
+    for path, scale in meshes:
+        solid = solidify(load_mesh(path, scale=scale).mesh, source=str(path))
+        merged = solid.mesh.copy()
+        merged.merge_vertices()
+        assert merged.is_watertight and len(merged.split(only_watertight=False)) == 1, path

@@ -19,7 +19,15 @@ undoes the usual disguises, in this order, and says what it did:
    twice in its volume (and so mass and inertia); the generalised winding number at sample
    points finds it and the mesh is rejected.
 6. *Pieces.* Several closed bodies (pieces that touch face to face, or overlap) are united with
-   manifold3d; the result must be one body. Overlap would otherwise be counted twice in the volume.
+   manifold3d; overlap would otherwise be counted twice in the volume. Pieces left apart by a gap
+   of at most GAP_MAX of the object (V-HACD decompositions and CAD assemblies leave micrometres)
+   are snapped across it and united; sealed voids the union encloses between overlapping pieces
+   are filled up to LOOSE_MAX of the volume (more is a hollow object, rejected); loose crumbs of at
+   most LOOSE_MAX of the volume are dropped; anything else apart is a second object, rejected with
+   the distance to it.
+7. *Pinches.* Where united pieces touch only along an edge, the result holds two vertices at one
+   position; they are moved apart by 1e-5 of the object's size so that readers that merge vertices
+   by position (validation, MuJoCo, STL) still see a closed surface.
 
 Every rejection is an `InputError` naming the mesh and the defect class; every repair adds a note.
 """
@@ -45,6 +53,15 @@ surface area; more than that is too much of the object to throw away."""
 
 OVERLAP_NOTE = 1e-3
 """Pieces whose union is smaller than their summed volume by more than this share overlapped."""
+
+GAP_MAX = 1e-3
+"""Closed pieces whose surfaces are at most this share of the object's largest extent apart are
+joined (the gap bridged): convex decompositions (V-HACD) and CAD exports leave micrometre gaps
+between pieces meant to touch."""
+
+LOOSE_MAX = 0.01
+"""Pieces apart from the main body that together hold at most this share of the volume are dropped
+as crumbs (a scan's specks, stray bits); more is a second object and the mesh is rejected."""
 
 SELF_INTERSECTION_SAMPLES = 512
 """Points at which the winding number of a closed body is evaluated (a jittered 8x8x8 grid)."""
@@ -258,6 +275,7 @@ def solidify(mesh: trimesh.Trimesh, source: str) -> Solid:
         how = f"{cut} cut where faces dangle or walls sit inside" if cut else "pieces separated where they touch"
         notes.append(f"{nonmanifold} non-manifold edges (3 or more faces on an edge): {how}")
     closed, open_parts = [], []
+    holes_closed = 0
     for group in groups:
         body = trimesh.Trimesh(mesh.vertices, mesh.faces[group], process=False)
         body.remove_unreferenced_vertices()
@@ -267,7 +285,7 @@ def solidify(mesh: trimesh.Trimesh, source: str) -> Solid:
             filled, holes, widest = close_holes(body)
             if holes == 0:
                 trimesh.repair.fix_winding(filled)
-                notes.append(f"{_count(_boundary_loops(body), 'small hole')} closed")
+                holes_closed += len(_boundary_loops(body) or [None])
                 body = filled
         volume = float(body.volume) if body.is_watertight and body.is_winding_consistent else 0.0
         scale = float(np.prod(np.maximum(body.extents, 1e-12)))
@@ -277,6 +295,8 @@ def solidify(mesh: trimesh.Trimesh, source: str) -> Solid:
         if volume < 0:
             body.invert()
         closed.append(body)
+    if holes_closed:
+        notes.append(f"{_count(holes_closed, 'small hole')} closed")
     if open_parts:
         area = sum(float(b.area) for b, _, _ in open_parts)
         share = area / (area + sum(float(b.area) for b in closed))
@@ -308,20 +328,179 @@ def solidify(mesh: trimesh.Trimesh, source: str) -> Solid:
                 "(or inside out), so volume, mass and inertia would be wrong"
             )
     if len(closed) == 1:
-        return Solid(closed[0], notes)
-    summed = sum(float(b.volume) for b in closed)
-    united = trimesh.boolean.union(closed, engine="manifold")
-    pieces = len(united.split(only_watertight=False)) if len(united.faces) else 0
-    if pieces != 1:
-        raise InputError(f"{tag}: {pieces} disconnected bodies (pieces that neither touch nor overlap), expected one")
-    if float(united.volume) < (1 - OVERLAP_NOTE) * summed:
+        return Solid(unpinch(closed[0]), notes)
+    return _unite(closed, notes, tag)
+
+
+def _volume(mesh: trimesh.Trimesh) -> float:
+    with np.errstate(all="ignore"):
+        return float(mesh.volume) if len(mesh.faces) else 0.0
+
+
+def _pieces(mesh: trimesh.Trimesh) -> list[trimesh.Trimesh]:
+    """The closed pieces of a union's result, largest first: each outer surface with the surfaces of
+    the cavities inside it (they come out of a split as pieces of negative volume), without the
+    zero-volume slivers that boolean operations leave where surfaces coincide (they enclose nothing)."""
+    if len(mesh.faces) == 0:
+        return []
+    parts = mesh.split(only_watertight=False)
+    floor = 1e-9 * float(np.prod(np.maximum(mesh.extents, 1e-12)))
+    outer = [p for p in parts if _volume(p) > floor]
+    cavities = [p for p in parts if _volume(p) < -floor]
+    members: list[list[trimesh.Trimesh]] = [[p] for p in outer]
+    for cavity in cavities:
+        point = np.asarray(cavity.vertices[:1])
+        owners = [i for i, p in enumerate(outer) if winding_numbers(p, point)[0] > 0.5]
+        if owners:  # the innermost (smallest) outer surface round it
+            members[min(owners, key=lambda i: _volume(outer[i]))].append(cavity)
+    pieces = [trimesh.util.concatenate(group) if len(group) > 1 else group[0] for group in members]
+    return sorted(pieces, key=_volume, reverse=True)
+
+
+def unpinch(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
+    """The closed mesh with vertices that sit at the same position but belong to different sheets of
+    the surface (where two pieces of a union touch along an edge, or a filled hole meets itself)
+    moved apart, each by 1e-5 of the object's size into its own sheet, so that merging vertices by
+    position (as every later reader does) does not turn the touching edge into a non-manifold one."""
+    vertices = np.asarray(mesh.vertices, dtype=float)
+    _, inverse = trimesh.grouping.unique_rows(vertices, digits=8)[0:2]
+    counts = np.bincount(inverse)
+    shared = np.flatnonzero(counts[inverse] > 1)
+    if len(shared) == 0:
+        return mesh
+    step = 1e-5 * float(mesh.extents.max())
+    moved = vertices.copy()
+    neighbours = mesh.vertex_neighbors
+    for v in shared:
+        ring = vertices[neighbours[v]].mean(axis=0) - vertices[v]
+        length = np.linalg.norm(ring)
+        if length > 0:
+            moved[v] += step * ring / length
+    return trimesh.Trimesh(moved, np.asarray(mesh.faces), process=False)
+
+
+def gap(a: trimesh.Trimesh, b: trimesh.Trimesh, limit: float) -> float:
+    """Distance between the surfaces of `a` and `b` (closest vertex of either to the other's
+    surface), or inf where their bounding boxes are more than `limit` apart."""
+    if np.any(a.bounds[0] > b.bounds[1] + limit) or np.any(b.bounds[0] > a.bounds[1] + limit):
+        return np.inf
+    near = []
+    for x, y in ((a, b), (b, a)):
+        points = np.asarray(x.vertices)
+        inside = np.all((points >= y.bounds[0] - limit) & (points <= y.bounds[1] + limit), axis=1)
+        if inside.any():
+            near.append(trimesh.proximity.closest_point(y, points[inside])[1].min())
+    return float(min(near)) if near else np.inf
+
+
+def _snap(a: trimesh.Trimesh, b: trimesh.Trimesh, tolerance: float) -> trimesh.Trimesh:
+    """`a` with each vertex within `tolerance` of `b`'s surface moved across the gap onto `b` and
+    `tolerance` / 2 into it, so that the two overlap and a union joins them."""
+    points = np.asarray(a.vertices, dtype=float).copy()
+    inside = np.all((points >= b.bounds[0] - tolerance) & (points <= b.bounds[1] + tolerance), axis=1)
+    idx = np.flatnonzero(inside)
+    if len(idx) == 0:
+        return a
+    closest, distance, triangle = trimesh.proximity.closest_point(b, points[idx])
+    near = distance <= tolerance
+    idx, closest, distance, triangle = idx[near], closest[near], distance[near], triangle[near]
+    direction = -np.asarray(b.face_normals)[triangle]  # into b
+    points[idx] = closest + 0.5 * tolerance * direction
+    return trimesh.Trimesh(points, np.asarray(a.faces), process=False)
+
+
+def _union(bodies: list[trimesh.Trimesh], tag: str) -> trimesh.Trimesh:
+    """manifold3d's union of closed bodies; an InputError where it refuses one as not a volume."""
+    try:
+        return trimesh.boolean.union(bodies, engine="manifold")
+    except ValueError as exc:  # manifold3d: "Not all meshes are volumes!"
+        raise InputError(
+            f"{tag}: pieces that are closed but not manifold volumes (an edge used twice in one direction, "
+            f"or a surface pinched at a point) cannot be united ({exc})"
+        ) from None
+
+
+def _fill_voids(piece: trimesh.Trimesh, notes: list[str], tag: str) -> trimesh.Trimesh:
+    """`piece` without the sealed inner voids that uniting overlapping pieces can enclose, where they hold
+    at most LOOSE_MAX of its volume (they were solid in each piece); larger ones are an InputError."""
+    parts = piece.split(only_watertight=False)
+    if len(parts) == 1:
+        return piece
+    outer = max(parts, key=_volume)
+    voids = -sum(_volume(p) for p in parts if p is not outer)
+    share = voids / _volume(outer)
+    if share > LOOSE_MAX:
+        raise InputError(
+            f"{tag}: hollow: {_count(len(parts) - 1, 'sealed inner cavity', 'sealed inner cavities')} of "
+            f"{share:.1%} of its volume; an object must be one solid body (fill the cavity)"
+        )
+    notes.append(f"{_count(len(parts) - 1, 'sealed void')} between united pieces filled ({share:.2%} of the volume)")
+    return outer
+
+
+def _unite(closed: list[trimesh.Trimesh], notes: list[str], tag: str) -> Solid:
+    """Unite closed bodies (pieces that touch, overlap, or lie within GAP_MAX of each other) into one;
+    loose pieces of at most LOOSE_MAX of the volume are dropped; anything else is an InputError."""
+    summed = sum(_volume(b) for b in closed)
+    pieces = _pieces(_union(closed, tag))
+    if not pieces:
+        raise InputError(f"{tag}: its closed bodies unite into nothing (degenerate)")
+    size = max(float(np.ptp(np.vstack([p.vertices for p in pieces]), axis=0).max()), 1e-12)
+    tolerance = GAP_MAX * size
+    gaps = []
+    if len(pieces) > 1:
+        n = len(pieces)
+        links = [(i, j, gap(pieces[i], pieces[j], tolerance)) for i in range(n) for j in range(i + 1, n)]
+        near = [(i, j, d) for i, j, d in links if d <= tolerance]
+        if near:
+            graph = coo_matrix((np.ones(len(near)), ([i for i, _, _ in near], [j for _, j, _ in near])), shape=(n, n))
+            _, labels = connected_components(graph, directed=False)
+            snapped = list(pieces)
+            for i, j, d in near:
+                snapped[j] = _snap(snapped[j], pieces[i], tolerance)
+                snapped[i] = _snap(snapped[i], pieces[j], tolerance)
+                gaps.append(d)
+            groups = [np.flatnonzero(labels == k) for k in np.unique(labels)]
+            joined = []
+            for group in groups:
+                if len(group) == 1:
+                    joined.append(pieces[group[0]])
+                    continue
+                united = _pieces(_union([snapped[k] for k in group], tag))
+                joined.extend(united)
+            pieces = sorted(joined, key=_volume, reverse=True)
+    loose = []
+    if len(pieces) > 1:
+        total = sum(_volume(p) for p in pieces)
+        loose = pieces[1:]
+        share = sum(_volume(p) for p in loose) / total
+        if share > LOOSE_MAX:
+            apart = min(gap(pieces[0], p, np.inf) for p in loose) * 1000
+            raise InputError(
+                f"{tag}: {len(pieces)} disconnected bodies (pieces that neither touch nor overlap, the nearest "
+                f"{apart:.3g} mm apart), expected one"
+            )
+        pieces = pieces[:1]
+    united = _fill_voids(pieces[0], notes, tag)
+    if gaps:
+        notes.append(
+            f"{_count(len(gaps), 'gap')} of up to {max(gaps) * 1000:.2g} mm between pieces closed "
+            f"(gaps up to {GAP_MAX:.1%} of the object are numerical, as convex decompositions and CAD exports leave)"
+        )
+    if float(united.volume) < (1 - OVERLAP_NOTE) * (summed - sum(_volume(p) for p in loose)):
         notes.append(
             f"{len(closed)} pieces overlap: united (volume {united.volume * 1e6:.4g} cm^3 instead of "
             f"{summed * 1e6:.4g} cm^3 counted twice)"
         )
-    else:
+    elif not gaps:
         notes.append(f"{len(closed)} pieces that touch face to face united into one body")
-    return Solid(united, notes)
+    if loose:
+        dropped = sum(_volume(p) for p in loose)
+        notes.append(
+            f"{_count(len(loose), 'loose piece')} dropped ({dropped / (_volume(united) + dropped):.2%} "
+            f"of the volume, apart from the body: crumbs, not part of the object)"
+        )
+    return Solid(unpinch(united), notes)
 
 
 def _count(n: int | list | None, singular: str, plural: str | None = None) -> str:

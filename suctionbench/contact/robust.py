@@ -191,17 +191,24 @@ def evaluate_samples(seal: SealModel, samples: GraspSamples) -> np.ndarray:
 
 def _wrench_gate(loads: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.ndarray, cup: CupConfig):
     """The closed-form wrench test of every load case as a seal-model gate: it only needs the ring
-    centres and the vacuum force (resistance only grows with V, as the gate must)."""
+    centres, the vacuum force and the lip's profile. The seal model asks twice (seal.Gate) with
+    the same ring centres, so each sample's swung wrench is computed once and kept."""
+    wrenches = np.full((len(loads), loads.shape[1], 6), np.nan)
+    known = np.zeros(len(loads), dtype=bool)
 
     def gate(
         idx: np.ndarray, centres: np.ndarray, vacuum: np.ndarray,
         lip_heights: np.ndarray | None = None, rim_bound: bool = False,
     ) -> np.ndarray:
+        new = ~known[idx]
+        todo, at = idx[new], centres[new]
+        for case in range(loads.shape[1]):
+            load = bellows_swing(loads[todo, case], com[todo], at, frames[todo], cup)
+            wrenches[todo, case] = external_wrench_at_contact(load, com[todo], at, frames[todo])
+        known[todo] = True
         ok = np.ones(len(idx), dtype=bool)
         for case in range(loads.shape[1]):
-            load = bellows_swing(loads[idx, case], com[idx], centres, frames[idx], cup)
-            wrench = external_wrench_at_contact(load, com[idx], centres, frames[idx])
-            ok &= resists(wrench, mu[idx], cup, vacuum, lip_heights, rim_bound=rim_bound)
+            ok &= resists(wrenches[idx, case], mu[idx], cup, vacuum, lip_heights, rim_bound=rim_bound)
         return ok
 
     return gate

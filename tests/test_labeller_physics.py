@@ -15,8 +15,8 @@ import math
 import numpy as np
 import pytest
 import trimesh
-from scipy.optimize import brentq
 from conftest import box, difference
+from scipy.optimize import brentq
 
 from suctionbench.config import (
     CUP_DEFAULT,

@@ -544,3 +544,16 @@ def test_pybullet_random_objects_and_vhacd_meshes_import(tmp_path):
         merged = solid.mesh.copy()
         merged.merge_vertices()
         assert merged.is_watertight and len(merged.split(only_watertight=False)) == 1, path
+
+
+def test_self_intersection_counts_by_the_share_of_the_object_it_doubles():
+    """A CAD export's sliver body that passes through itself (a camera model had one of 0.4 mm) does not
+    change the object's mass; the same surface as the whole object does."""
+    t = np.linspace(0.15, 2 * np.pi - 0.15, 80)
+    curl = _tube(np.stack([0.04 * np.cos(t), 0.025 * np.sin(2 * t), np.zeros_like(t)], axis=1), 0.008)
+    with pytest.raises(InputError, match=r"self-intersecting surface: it encloses about \d+% of the object's volume"):
+        _solid(curl)
+    sliver = curl.copy().apply_scale(0.05)  # 4 mm across, inside a 50 mm box
+    box = _box((0.05, 0.05, 0.05))
+    solid = _solid(trimesh.util.concatenate([box, sliver]))
+    assert solid.mesh.volume == pytest.approx(box.volume, rel=1e-6)

@@ -67,7 +67,8 @@ SELF_INTERSECTION_SAMPLES = 512
 """Points at which the winding number of a closed body is evaluated (a jittered 8x8x8 grid)."""
 
 SELF_INTERSECTION_MAX = 0.005
-"""Share of a body's volume that may be counted twice (winding number 2, or -1) before it is rejected."""
+"""Share of the object's volume that one closed body may count twice (winding number 2, or -1) before
+the mesh is rejected."""
 
 
 @dataclass
@@ -319,13 +320,16 @@ def solidify(mesh: trimesh.Trimesh, source: str) -> Solid:
             f"{_count(len(open_parts), 'open body', 'open bodies')} dropped ({faces} faces, "
             f"{share:.1%} of the surface: sheets or inner faces that enclose no volume)"
         )
+    total = sum(float(body.volume) for body in closed)
     for i, body in enumerate(closed):
-        doubled = doubled_share(body)
+        # what counts is the volume counted twice as a share of the object's: a sliver body of a
+        # billionth of it is no error in mass or inertia, whatever share of itself it doubles
+        doubled = doubled_share(body) * float(body.volume) / total
         if doubled > SELF_INTERSECTION_MAX:
             which = f" (body {i + 1} of {len(closed)})" if len(closed) > 1 else ""
             raise InputError(
-                f"{tag}: self-intersecting surface{which}: it encloses about {doubled:.0%} of its volume twice "
-                "(or inside out), so volume, mass and inertia would be wrong"
+                f"{tag}: self-intersecting surface{which}: it encloses about {doubled:.0%} of the object's volume "
+                "twice (or inside out), so volume, mass and inertia would be wrong"
             )
     if len(closed) == 1:
         return Solid(unpinch(closed[0]), notes)
@@ -360,23 +364,32 @@ def _pieces(mesh: trimesh.Trimesh) -> list[trimesh.Trimesh]:
 def unpinch(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
     """The closed mesh with vertices that sit at the same position but belong to different sheets of
     the surface (where two pieces of a union touch along an edge, or a filled hole meets itself)
-    moved apart, each by 1e-5 of the object's size into its own sheet, so that merging vertices by
-    position (as every later reader does) does not turn the touching edge into a non-manifold one."""
+    moved apart into their own sheets, the k-th copy of a position by k x 1e-5 of the object's size,
+    so that merging vertices by position (as every later reader does) does not turn the touching
+    edge into a non-manifold one."""
     vertices = np.asarray(mesh.vertices, dtype=float)
-    _, inverse = trimesh.grouping.unique_rows(vertices, digits=8)[0:2]
-    counts = np.bincount(inverse)
-    shared = np.flatnonzero(counts[inverse] > 1)
-    if len(shared) == 0:
-        return mesh
     step = 1e-5 * float(mesh.extents.max())
-    moved = vertices.copy()
-    neighbours = mesh.vertex_neighbors
-    for v in shared:
-        ring = vertices[neighbours[v]].mean(axis=0) - vertices[v]
-        length = np.linalg.norm(ring)
-        if length > 0:
-            moved[v] += step * ring / length
-    return trimesh.Trimesh(moved, np.asarray(mesh.faces), process=False)
+    neighbours = None
+    for _ in range(3):
+        _, inverse = trimesh.grouping.unique_rows(vertices, digits=8)[0:2]
+        order = np.argsort(inverse, kind="stable")
+        counts = np.bincount(inverse)
+        if counts.max() == 1:
+            break
+        neighbours = neighbours or mesh.vertex_neighbors
+        rank = np.empty(len(vertices), dtype=int)
+        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        rank[order] = np.arange(len(vertices)) - np.repeat(starts, counts)
+        moved = vertices.copy()
+        for v in np.flatnonzero(counts[inverse] > 1):
+            ring = vertices[neighbours[v]].mean(axis=0) - vertices[v]
+            length = np.linalg.norm(ring)
+            if length > 0:
+                moved[v] += (rank[v] + 1) * step * ring / length
+        vertices = moved
+    if np.array_equal(vertices, mesh.vertices):
+        return mesh
+    return trimesh.Trimesh(vertices, np.asarray(mesh.faces), process=False)
 
 
 def gap(a: trimesh.Trimesh, b: trimesh.Trimesh, limit: float) -> float:

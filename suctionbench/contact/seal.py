@@ -64,6 +64,10 @@ where the longest cone spring reaches the limit (13.9 deg for the 15 mm cup).
    (~1.0 mm^2), else `leak`. The vacuum force V(A) (= p(A) x effective area) is the V of the
    wrench test, so a leaking seal holds less.
 
+The profile the lip rests on relative to its bellows plane (zero mean and first harmonic) is also
+returned, `SealResult.lip_heights`: the fold the lip lacks there, which sets its uneven preload in
+the wrench test (wrench.py, "Lip preload").
+
 The perimeter stretch of the lip model is that of the lip itself, relative to its bellows plane
 (the tilt of the plane stretches nothing: the lip tilts with the bellows), and is still bound by
 the stretch limit; the paper's flexion and cone springs are reported, not tested (the bellows

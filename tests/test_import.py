@@ -557,3 +557,14 @@ def test_self_intersection_counts_by_the_share_of_the_object_it_doubles():
     box = _box((0.05, 0.05, 0.05))
     solid = _solid(trimesh.util.concatenate([box, sliver]))
     assert solid.mesh.volume == pytest.approx(box.volume, rel=1e-6)
+
+
+def test_a_flat_closed_pair_of_faces_is_not_a_body_to_unite():
+    """Two back-to-back triangles are watertight with no volume; as a 'closed body' they made manifold3d's
+    union of a robot chassis come out empty."""
+    pieces = [_box((0.04, 0.03, 0.02)), _box((0.02, 0.02, 0.02), (0.03, 0.0, 0.0))]
+    corners = [[0.26125, 0.09226, 0.006025], [0.26125, 0.092034, 0.006216], [0.26125, 0.091807, 0.006407]]
+    flat = trimesh.Trimesh(corners, [[0, 1, 2], [0, 2, 1]], process=False)  # as in pybullet's laikago chassis
+    solid = _solid(trimesh.util.concatenate([*pieces, flat]))
+    assert solid.mesh.volume == pytest.approx(0.04 * 0.03 * 0.02 + 0.02**3, rel=1e-5)
+    assert any("1 open body dropped" in note for note in solid.notes), solid.notes

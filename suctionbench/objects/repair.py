@@ -277,6 +277,7 @@ def solidify(mesh: trimesh.Trimesh, source: str) -> Solid:
         notes.append(f"{nonmanifold} non-manifold edges (3 or more faces on an edge): {how}")
     closed, open_parts = [], []
     holes_closed = 0
+    scale = float(np.prod(np.maximum(mesh.extents, 1e-12)))  # the object's box: what "no volume" is relative to
     for group in groups:
         body = trimesh.Trimesh(mesh.vertices, mesh.faces[group], process=False)
         body.remove_unreferenced_vertices()
@@ -289,8 +290,7 @@ def solidify(mesh: trimesh.Trimesh, source: str) -> Solid:
                 holes_closed += len(_boundary_loops(body) or [None])
                 body = filled
         volume = float(body.volume) if body.is_watertight and body.is_winding_consistent else 0.0
-        scale = float(np.prod(np.maximum(body.extents, 1e-12)))
-        if abs(volume) <= 1e-9 * scale:
+        if abs(volume) <= 1e-9 * scale:  # encloses nothing (a flat pair of back-to-back faces, a sheet)
             open_parts.append((body, holes, widest))
             continue
         if volume < 0:

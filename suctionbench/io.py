@@ -27,7 +27,7 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     except OSError as exc:
-        raise InputError(f"output '{path}': cannot write there ({exc.strerror})") from None
+        raise InputError(f"output '{path}': cannot write there ({os_error_reason(exc)})") from None
     os.close(fd)
     tmp_path = Path(tmp)
     try:
@@ -125,10 +125,17 @@ def atomic_dir(out: str | Path, refuse: Callable[[Path], str | None]) -> Iterato
         staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent))
         os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes 0700 directories; use the usual mode
     except OSError as exc:
-        raise InputError(f"output '{out}': cannot write there ({exc.strerror})") from None
+        raise InputError(f"output '{out}': cannot write there ({os_error_reason(exc)})") from None
     try:
-        yield staging
-        publish_dir(staging, out)
+        try:
+            yield staging
+            publish_dir(staging, out)
+        except InputError as exc:  # name the output, not its hidden staging directory
+            raise InputError(str(exc).replace(str(staging), str(out))) from None
+        except OSError as exc:
+            if exc.errno not in WRITE_ERRNOS:
+                raise
+            raise InputError(f"output '{out}': cannot write there ({os_error_reason(exc)})") from None
     finally:
         shutil.rmtree(staging, ignore_errors=True)
 

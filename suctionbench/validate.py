@@ -150,6 +150,10 @@ generation units and once in the shards."""
 BYTES_PER_TRIAL_LOG = 1.5e6
 """Disk per eval trial: its MCAP log (about 1.3 MB with a 640 x 480 depth image)."""
 
+BYTES_PER_LABEL = 160
+"""Disk per grasp of `label --out`: its arrays uncompressed (points, approaches, seal diagnostics,
+contact point, four metrics: 132 bytes; the compressed file holds about a third of that)."""
+
 
 def label_memory(grasps: int, samples: int) -> float:
     """Bytes the robust labeller needs for `grasps` grasps of `samples` samples each."""

@@ -253,24 +253,39 @@ def test_ray_generate_killed_leaves_no_orphans(tmp_path):
     assert not left, f"{len(left)} Ray processes outlived the killed generate by {RAY_ORPHAN_GRACE_S} s: {report}"
 
 
-@pytest.fixture
-def full_disk(tmp_path):
-    """A 256 KiB tmpfs filled up (root on Linux only; skipped elsewhere)."""
-    mount = tmp_path / "small"
-    mount.mkdir()
-    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=256k", "tmpfs", str(mount)],
+@contextlib.contextmanager
+def small_disk(folder: Path, free: int = 0):
+    """A 256 KiB tmpfs mounted on `folder` and filled up to `free` bytes left (root on Linux only;
+    skipped elsewhere)."""
+    folder.mkdir()
+    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=256k", "tmpfs", str(folder)],
                                            capture_output=True).returncode != 0:
         pytest.skip("cannot mount a small tmpfs here")
     try:
-        with open(mount / "filler", "wb", buffering=0) as fh:
+        with open(folder / "filler", "wb", buffering=0) as fh:
             try:
-                while True:
+                while shutil.disk_usage(folder).free > free:
                     fh.write(b"\0" * 4096)
             except OSError as exc:
                 assert exc.errno == errno.ENOSPC
-        yield mount
+        assert shutil.disk_usage(folder).free <= free
+        yield folder
     finally:
-        subprocess.run(["umount", "-l", str(mount)], check=False)
+        subprocess.run(["umount", "-l", str(folder)], check=False)
+
+
+@pytest.fixture
+def full_disk(tmp_path):
+    """A 256 KiB tmpfs filled up."""
+    with small_disk(tmp_path / "small") as mount:
+        yield mount
+
+
+@pytest.fixture
+def nearly_full_disk(tmp_path):
+    """A 256 KiB tmpfs with 64 KiB left: room to start a file, not to finish an episode log."""
+    with small_disk(tmp_path / "nearly_full", free=64 * 1024) as mount:
+        yield mount
 
 
 @pytest.fixture
@@ -303,10 +318,17 @@ def box_mesh(tmp_path) -> Path:
     return path
 
 
-def test_full_disk_is_an_input_error_naming_the_path(full_disk, box_mesh):
+def test_full_disk_is_an_input_error_naming_the_path(full_disk, box_mesh, monkeypatch):
+    """The labels do not fit: refused before labelling (the size estimate); and where the estimate
+    is passed (here switched off), the write itself fails with one line naming the file."""
     out = full_disk / "labels.npz"
-    result = runner.invoke(app, ["label", str(box_mesh), "--grasps", "20", "--samples", "5", "--mass", "0.1",
-                                 "--out", str(out), "--json"])
+    argv = ["label", str(box_mesh), "--grasps", "20", "--samples", "5", "--mass", "0.1", "--out", str(out), "--json"]
+    result = runner.invoke(app, argv)
+    assert result.exit_code == 2, result.stderr
+    error = json.loads(result.stdout.splitlines()[-1])["error"]
+    assert error.startswith("--grasps 20 --out: needs about") and f"of disk under '{out}', 0 B free" in error, error
+    monkeypatch.setattr("suctionbench.cli.label.require_disk", lambda *a: None)
+    result = runner.invoke(app, argv)
     assert result.exit_code == 2, result.stderr
     error = json.loads(result.stdout.splitlines()[-1])["error"]
     assert str(out) in error and "No space left" in error and "Traceback" not in result.stderr
@@ -359,3 +381,62 @@ def test_episode_log_errors_name_the_log_not_its_temporary_file(read_only_dir):
         EpisodeLog(log, {"seed": 0})
     assert info.value.filename == str(log) and info.value.errno in (errno.EROFS, errno.EACCES)
     assert list(read_only_dir.iterdir()) == []
+
+
+# -- a full disk in the middle of an episode log ---------------------------------------------------
+
+
+def test_episode_log_on_a_full_disk_names_the_log_and_leaves_nothing(full_disk, nearly_full_disk):
+    """The library's writer: on a disk without room for the header, or with room for the first
+    messages only (the disk fills mid-episode), the error is an OSError naming the log, not its
+    hidden .part file, and the .part file is gone."""
+    import numpy as np
+
+    from suctionbench.runlog.writer import EpisodeLog
+
+    for disk in (full_disk, nearly_full_disk):
+        log = disk / "episode.mcap"
+        with pytest.raises(OSError) as info, EpisodeLog(log, {"seed": 0}) as episode:
+            names = [f"joint_{i}" for i in range(2048)]
+            for step in range(100):  # ~4 MB of joint states: far more than is left
+                episode.log_joint_states(step * 0.01, names, np.random.default_rng(step).random(2048).tolist())
+        assert info.value.errno == errno.ENOSPC and info.value.filename == str(log)
+        assert sorted(p.name for p in disk.iterdir()) == ["filler"]
+
+
+def test_pick_log_on_a_disk_that_fills_mid_episode(nearly_full_disk, monkeypatch):
+    """pick --log: refused before the episode when the log cannot fit (the size estimate); with the
+    estimate switched off, the disk fills while the episode is logged: exit 2, one line naming the
+    log, no .part left."""
+    log = nearly_full_disk / "episode.mcap"
+    argv = ["pick", "--object", "basic/box_tea", "--log", str(log), "--json"]
+    result = runner.invoke(app, argv)
+    assert result.exit_code == 2, result.stderr
+    assert json.loads(result.stdout.splitlines()[-1])["error"].startswith("--log: needs about")
+    monkeypatch.setattr("suctionbench.cli.pick.require_disk", lambda *a: None)
+    result = runner.invoke(app, argv)
+    assert result.exit_code == 2, result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1 and "Traceback" not in result.stderr
+    error = json.loads(result.stdout.splitlines()[-1])["error"]
+    assert error.startswith(f"'{log}': No space left on device"), error
+    assert sorted(p.name for p in nearly_full_disk.iterdir()) == ["filler"]
+
+
+def test_eval_disk_full_mid_trial_log_is_resumable(nearly_full_disk, monkeypatch):
+    """eval whose disk fills while a trial is logged (the estimate passed: something else filled
+    the disk): exit 2, one line naming the trial log, no .part file, the run kept in OUT.incomplete,
+    which a rerun points to (--resume)."""
+    monkeypatch.setattr("suctionbench.evaluation.runner.BYTES_PER_TRIAL_LOG", 1)
+    out = nearly_full_disk / "run"
+    argv = ["eval", "--policy", "centroid", "--set", "basic", "--trials", "2", "--workers", "1", "--out", str(out),
+            "--json"]
+    result = runner.invoke(app, argv)
+    assert result.exit_code == 2, result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1 and "Traceback" not in result.stderr
+    error = json.loads(result.stdout.splitlines()[-1])["error"]
+    log = nearly_full_disk / "run.incomplete" / "trials" / "trial_00000.mcap"
+    assert error.startswith(f"'{log}': No space left on device"), error
+    assert not out.exists() and not list(nearly_full_disk.rglob("*.part"))
+    assert sorted(p.name for p in (nearly_full_disk / "run.incomplete").iterdir()) == ["run.json", "trials"]
+    again = runner.invoke(app, argv)
+    assert again.exit_code == 2 and "--resume" in json.loads(again.stdout.splitlines()[-1])["error"]

@@ -14,7 +14,15 @@ from rich.text import Text
 
 from suctionbench.cli.common import JsonOpt, SeedOpt, app, console, err, parse_vector, progress_bar, run_command
 from suctionbench.errors import InputError
-from suctionbench.validate import MAX_GRASP_OFFSET, grasp_near_surface, label_memory, output_file, require_memory
+from suctionbench.validate import (
+    BYTES_PER_LABEL,
+    MAX_GRASP_OFFSET,
+    grasp_near_surface,
+    label_memory,
+    output_file,
+    require_disk,
+    require_memory,
+)
 
 
 @app.command()
@@ -51,6 +59,7 @@ def label(
             output_file(out, "--out")
             if out.suffix != ".npz":  # never write labels over a file of another kind
                 raise InputError(f"--out '{out}': expected a .npz file name")
+            require_disk(out, grasps * BYTES_PER_LABEL + 2**16, f"--grasps {grasps} --out")
         require_memory(label_memory(grasps or 1, samples), f"--grasps {grasps or 1} x --samples {samples}")
         config = LabelConfig(
             cup=cup_preset(cup), perturbation=replace(PerturbationConfig(), num_samples=samples)

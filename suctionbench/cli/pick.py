@@ -12,7 +12,7 @@ import typer
 from suctionbench.cli.common import JsonOpt, SeedOpt, app, parse_vector, print_kv, run_command
 from suctionbench.cli.plan import PolicyArgOpt
 from suctionbench.errors import InputError
-from suctionbench.validate import output_file
+from suctionbench.validate import BYTES_PER_TRIAL_LOG, output_file, require_disk
 
 
 @app.command()
@@ -48,6 +48,7 @@ def pick(
             if log.suffix != ".mcap":
                 raise InputError(f"--log '{log}': expected a .mcap file name")
             output_file(log, "--log")
+            require_disk(log, BYTES_PER_TRIAL_LOG, "--log")
         if render is not None:
             output_file(render, "--render")
         values = None

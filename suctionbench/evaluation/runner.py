@@ -124,7 +124,7 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
     check_engine(engine)
     out = output_dir(out, "--out")
     count = trials or task.trials
-    require_disk(out, count * BYTES_PER_TRIAL_LOG, f"{count} trials")  # before planning them
+    require_disk(out, count * BYTES_PER_TRIAL_LOG, f"--trials {count}")  # before planning them
     planned = plan_trials(task, spec, model=model, trials=trials, seed=seed, metric=metric, cup=cup,
                           policy_args=policy_args, camera=camera_spec)
     staging = staging_dir(out)

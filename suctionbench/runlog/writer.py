@@ -256,6 +256,9 @@ class EpisodeLog:
             self._writer.start(profile="", library=f"suctionbench {__version__}")
             self._writer.add_metadata(METADATA_NAME, record)
             self._writer.add_metadata(METADATA_TYPES_NAME, types)
+        except OSError as exc:  # a full disk while the header is flushed
+            self.abort()
+            raise self._named(exc) from None
         except BaseException:
             self.abort()
             raise
@@ -302,12 +305,19 @@ class EpisodeLog:
         return type(exc)(exc.errno, exc.strerror, str(self.path)) if exc.errno else exc
 
     def abort(self) -> None:
-        """Discard the episode: close and delete the temp file; `path` is left untouched."""
+        """Discard the episode: close and delete the temp file; `path` is left untouched.
+
+        Closing flushes what is buffered, which fails on a full disk: the temp file is deleted all
+        the same (the error that led here is the one worth reporting)."""
         if self._file is None:
             return
-        self._file.close()
-        self._file = None
-        self._tmp_path.unlink(missing_ok=True)
+        file, self._file = self._file, None
+        try:
+            file.close()
+        except OSError:
+            pass
+        finally:
+            self._tmp_path.unlink(missing_ok=True)
 
     # -- low level ---------------------------------------------------------------------------
 
@@ -331,14 +341,14 @@ class EpisodeLog:
         """Append `message` (converted with `jsonable`) to `topic` at log time `ns` nanoseconds."""
         if self._file is None:
             raise RuntimeError(f"episode log {self.path} is already closed")
-        channel_id = self._channel(topic)
-        sequence = self._sequence.get(topic, 0)
-        self._sequence[topic] = sequence + 1
         data = json.dumps(jsonable(message), allow_nan=False, separators=(",", ":")).encode()
         try:
+            channel_id = self._channel(topic)
+            sequence = self._sequence.get(topic, 0)
             self._writer.add_message(channel_id, log_time=ns, data=data, publish_time=ns, sequence=sequence)
         except OSError as exc:  # a full disk while a chunk is flushed
             raise self._named(exc) from None
+        self._sequence[topic] = sequence + 1
 
     @staticmethod
     def _frame_transform(ns: int, child: str, world_from_child: Any) -> dict[str, Any]:

@@ -90,6 +90,16 @@ def check_engine(engine: str) -> None:
         raise InputError(f"--engine '{engine}': expected {' or '.join(ENGINES)}")
 
 
+class _Pool(ProcessPoolExecutor):
+    """A process pool that, left by an exception (a failed task, a full disk, Ctrl-C), cancels the
+    tasks not started yet instead of running them all first: the error is reported after the tasks
+    already running end, not after the whole queue."""
+
+    def __exit__(self, exc_type: Any, exc: Any, tb: Any) -> bool:
+        self.shutdown(wait=True, cancel_futures=exc_type is not None)
+        return False
+
+
 def process_pool(workers: int) -> ProcessPoolExecutor:
     """A process pool of fresh interpreters (spawn) whose workers die with this process (`die_with_parent`).
 
@@ -101,12 +111,13 @@ def process_pool(workers: int) -> ProcessPoolExecutor:
 
     PR_SET_PDEATHSIG fires when the *thread* that started the worker ends; the pool starts its
     workers from the thread that submits work, so submit from a thread that outlives the pool
-    (the main thread, as every command does).
+    (the main thread, as every command does). Used as a context manager, an exception cancels the
+    tasks still queued (`_Pool`).
     """
     import multiprocessing
 
-    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=die_with_parent, initargs=(os.getpid(),))
+    return _Pool(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                 initializer=die_with_parent, initargs=(os.getpid(),))
 
 
 def map_ordered(

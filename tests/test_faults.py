@@ -440,3 +440,64 @@ def test_eval_disk_full_mid_trial_log_is_resumable(nearly_full_disk, monkeypatch
     assert sorted(p.name for p in (nearly_full_disk / "run.incomplete").iterdir()) == ["run.json", "trials"]
     again = runner.invoke(app, argv)
     assert again.exit_code == 2 and "--resume" in json.loads(again.stdout.splitlines()[-1])["error"]
+
+
+# -- interrupted runs and failing tasks ------------------------------------------------------------
+
+
+def test_a_failing_task_cancels_the_queue():
+    """A pool left by an exception cancels the tasks not yet started: the error arrives after the
+    running tasks end, not after the whole queue (here 20 x 1 s on 2 workers)."""
+    from suctionbench.parallel import map_ordered
+
+    start = time.monotonic()
+    with pytest.raises(ValueError, match="non-negative"):
+        list(map_ordered(time.sleep, [(-1,)] + [(1,)] * 20, workers=2))
+    assert time.monotonic() - start < 8
+
+
+def test_interrupt_is_one_line_and_a_json_line(capsys):
+    """Ctrl-C in a command: exit 130 with one stderr line and, under --json, the JSON line."""
+    import typer
+
+    from suctionbench.cli.common import run_command
+
+    def body():
+        raise KeyboardInterrupt
+
+    with pytest.raises(typer.Exit) as info:
+        run_command(True, body)
+    assert info.value.exit_code == 130
+    captured = capsys.readouterr()
+    assert json.loads(captured.out.splitlines()[-1]) == {"ok": False, "error": "interrupted"}
+    assert len(captured.err.strip().splitlines()) == 1 and "interrupted" in captured.err
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_interrupted_eval_stops_at_once_and_resumes(tmp_path):
+    """SIGINT to an eval parent (its workers untouched, unlike a terminal's Ctrl-C): it stops after
+    the running trials instead of running the whole queue, exits 130 with one line and the JSON
+    line, leaves no worker, and --resume finishes the run."""
+    out = tmp_path / "run"
+    cmd = [sys.executable, "-m", "suctionbench", "eval", "--policy", "centroid", "--set", "basic", "--trials", "40",
+           "--workers", "2", "--seed", "1", "--out", str(out), "--json"]
+    parent = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    logs = tmp_path / "run.incomplete" / "trials"
+    deadline = time.monotonic() + 240
+    while time.monotonic() < deadline and not list(logs.glob("trial_*.mcap")):
+        time.sleep(0.2)
+    workers = child_pids(parent.pid)
+    parent.send_signal(signal.SIGINT)
+    try:
+        stdout, stderr = parent.communicate(timeout=30)
+    finally:
+        parent.kill()
+    assert parent.returncode == 130, stderr[-2000:]
+    assert [line for line in stderr.splitlines() if line.strip()] == ["error: interrupted (Ctrl-C)"]
+    assert json.loads(stdout.splitlines()[-1]) == {"ok": False, "error": "interrupted"}
+    assert not wait_gone(workers)
+    assert len(list(logs.glob("trial_*.mcap"))) < 20 and not list(logs.glob(".*.part"))
+    resumed = runner.invoke(app, ["eval", *cmd[4:-1], "--resume", "--json"])
+    assert resumed.exit_code == 0, resumed.stderr[-2000:]
+    assert json.loads(resumed.stdout.splitlines()[-1])["trials"] == 40

@@ -88,7 +88,7 @@ class ContractGroup(typer.core.TyperGroup):
             error_line(exc.format_message())
             emit({"ok": False, "error": exc.format_message()}, "--json" in argv)
             rv = exc.exit_code
-        except _click.exceptions.Abort:  # Ctrl-C, or a closed pipe under --help
+        except typer.Abort:  # end of input at a prompt, or a closed pipe under --help
             err.print("aborted")
             rv = 1
         code = rv if isinstance(rv, int) else 0
@@ -156,6 +156,10 @@ def run_command(as_json: bool, body: Callable[[], dict[str, Any]]) -> None:
         fail_input(os_error_message(exc), as_json)
     except MemoryError:
         fail_input("out of memory (use smaller sizes)", as_json)
+    except KeyboardInterrupt:  # Ctrl-C: one line (and the JSON line), exit 130 as shells expect
+        error_line("interrupted (Ctrl-C)")
+        emit({"ok": False, "error": "interrupted"}, as_json)
+        raise typer.Exit(130) from None
     except Exception as exc:  # an internal failure: say so, with the traceback on stderr
         fail_internal(exc, as_json)
     emit({"ok": True, **result}, as_json)

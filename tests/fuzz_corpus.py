@@ -234,6 +234,11 @@ def build_corpus(root: Path) -> dict[str, Path]:
     p["run_bad_log"] = write_run(root / "run_bad_log")
     log = p["run_bad_log"] / "trials" / "trial_00001.mcap"
     log.write_bytes(log.read_bytes()[:-40])
+
+    # directories holding a user's files where a command writes: nothing of theirs may go
+    (root / "user_model").mkdir()
+    p["user_model"] = root / "user_model"
+    (p["user_model"] / "model.json").write_text('{"my": "own model card"}\n')
     return p
 
 
@@ -398,6 +403,11 @@ def cases(p: dict[str, Path]) -> list[Case]:
         add("objects import", "objects", "import", *argv, "--root", r / "user_objects")
     for key in ("nope/x", "../../etc", "basic"):
         add("objects show", "objects", "show", key)
+
+    # train into a directory holding a model card it did not write, with and without --overwrite
+    for extra in ([], ["--overwrite"]):
+        add("train", *t, "--dataset", p["ds_good"], "--out", p["user_model"], *extra,
+            keep=[p["user_model"] / "model.json"])
     return out
 
 

@@ -442,6 +442,23 @@ def test_eval_disk_full_mid_trial_log_is_resumable(nearly_full_disk, monkeypatch
     assert again.exit_code == 2 and "--resume" in json.loads(again.stdout.splitlines()[-1])["error"]
 
 
+def test_save_model_on_a_full_disk_names_the_weights(full_disk):
+    """safetensors' own writer fails on a full disk with an error of its own type and no path; the
+    weights are serialised in memory and written by Python instead: InputError naming the file."""
+    import torch
+
+    from suctionbench.errors import InputError
+    from suctionbench.learning.checkpoint import GQCNNModel, save_model
+    from suctionbench.learning.data import NormStats
+    from suctionbench.learning.models import build_model
+
+    model = GQCNNModel(build_model("compact", torch.Generator().manual_seed(0)),
+                       NormStats(0.58, 0.01, (0.58, 0.3), (0.01, 0.2), count=10), {"arch": "compact"})
+    with pytest.raises(InputError, match=f"output '{full_disk / 'm' / 'model.safetensors'}'.*No space left"):
+        save_model(full_disk / "m", model)
+    assert not list((full_disk / "m").iterdir())
+
+
 # -- interrupted runs and failing tasks ------------------------------------------------------------
 
 

@@ -220,6 +220,7 @@ CORPUS_NAMES = [
     "ds_empty_card", "ds_bad_card", "ds_no_card", "ds_no_splits", "ds_nan", "model_good", "model_nan",
     "model_truncated", "model_bad_card", "model_no_weights", "model_empty", "run_good", "run_killed", "run_killed0",
     "run_extra", "run_truncated_json", "run_list_json", "run_empty_json", "run_no_trials", "run_bad_log",
+    "user_model",
 ]
 
 
@@ -273,3 +274,56 @@ def test_overwrite_replaces_only_a_dataset(corpus, tmp_path):
     with pytest.raises(Exception, match="notes.txt"):
         remove_dataset(theirs)
     assert (theirs / "splits" / "notes.txt").is_file() and (theirs / "config.json").is_file()
+
+
+def test_train_never_replaces_files_it_did_not_write(corpus, tmp_path):
+    """A model card of someone else's in --out: train refuses, with or without --overwrite, and the
+    file is unchanged; a run of its own in the same place is resumed or replaced as before."""
+    theirs = tmp_path / "theirs"
+    theirs.mkdir()
+    (theirs / "model.json").write_text('{"my": "card"}')
+    (theirs / "precision_recall.png").write_bytes(b"my plot")
+    base = ["train", "--dataset", str(corpus["ds_good"]), "--arch", "compact", "--epochs", "1", "--json"]
+    for extra in ([], ["--overwrite"]):
+        result = runner.invoke(app, [*base, "--out", str(theirs), *extra])
+        line = assert_clean_exit_2(result, as_json=True, needle="'model.json', which suctionbench did not write")
+        assert str(theirs) in line
+    assert (theirs / "model.json").read_text() == '{"my": "card"}'
+    (theirs / "model.json").unlink()
+    assert_clean_exit_2(runner.invoke(app, [*base, "--out", str(theirs)]), as_json=True,
+                        needle="'precision_recall.png', which suctionbench did not write")
+    ours = tmp_path / "ours"
+    assert runner.invoke(app, [*base, "--out", str(ours)]).exit_code == 0
+    again = runner.invoke(app, [*base, "--out", str(ours), "--overwrite", "--seed", "1"])
+    assert again.exit_code == 0, again.stderr[-1500:]
+
+
+def test_train_refuses_sizes_the_machine_cannot_hold(corpus, tmp_path, monkeypatch):
+    """The batch's memory and the checkpoints' disk are estimated before training."""
+    base = ["train", "--dataset", str(corpus["ds_good"]), "--arch", "dn3", "--epochs", "1", "--out",
+            str(tmp_path / "m"), "--json"]
+    monkeypatch.setattr("suctionbench.validate.available_memory", lambda: 50 * 2**20)
+    assert_clean_exit_2(runner.invoke(app, base), as_json=True, needle="--batch-size 64 (--arch dn3): needs about")
+    monkeypatch.setattr("shutil.disk_usage", lambda _p: shutil_usage(total=2**30, used=2**30 - 2**20, free=2**20))
+    monkeypatch.setattr("suctionbench.validate.available_memory", lambda: 2**40)
+    assert_clean_exit_2(runner.invoke(app, base), as_json=True, needle="--arch dn3 checkpoints: needs about")
+    assert not (tmp_path / "m").exists()
+
+
+def shutil_usage(**kw):
+    import shutil
+
+    return shutil._ntuple_diskusage(kw["total"], kw["used"], kw["free"])
+
+
+def test_a_nan_training_checkpoint_is_refused(tmp_path):
+    import torch
+
+    from suctionbench.errors import InputError
+    from suctionbench.learning.checkpoint import STATE_FORMAT, load_train_state, save_train_state
+
+    save_train_state(tmp_path, {"model": {"w": torch.tensor([1.0, float("nan")])}})
+    with pytest.raises(InputError, match="train_state.pt'.*NaN or infinite"):
+        load_train_state(tmp_path)
+    save_train_state(tmp_path, {"model": {"w": torch.tensor([1.0, 2.0])}})
+    assert load_train_state(tmp_path)["format"] == STATE_FORMAT

@@ -96,14 +96,17 @@ def save_model(directory: str | Path, model: GQCNNModel) -> Path:
 
     The card is `model.card` plus the arch, normalisation statistics, format tag and weights hash.
     """
-    from safetensors.torch import save_file
+    from safetensors.torch import save
 
     directory = Path(directory)
     weights = directory / WEIGHTS_NAME
     tensors = {k: v.detach().to("cpu").contiguous().clone() for k, v in model.network.state_dict().items()}
     check_finite_weights(tensors, f"model to save in '{directory}'")  # a diverged network is not a model
+    # Serialised in memory (at most tens of MB), written by Python: a full disk is an OSError that
+    # atomic_path reports with the path (safetensors' own file writer raises an error without one).
+    data = save(tensors, metadata={"format": CARD_FORMAT, "arch": model.arch})
     with atomic_path(weights) as tmp:
-        save_file(tensors, str(tmp), metadata={"format": CARD_FORMAT, "arch": model.arch})
+        tmp.write_bytes(data)
     card = dict(model.card)
     card.update(format=CARD_FORMAT, normalisation=model.stats.to_dict(), weights=WEIGHTS_NAME,
                 weights_sha256=file_digest(weights)[0])
@@ -197,4 +200,8 @@ def load_train_state(directory: str | Path) -> dict[str, Any] | None:
                          "start over") from None
     if not isinstance(state, dict) or state.get("format") != STATE_FORMAT:
         raise InputError(f"training checkpoint '{path}': not a {STATE_FORMAT} file")
+    model = state.get("model")
+    if isinstance(model, dict):  # resuming from NaN weights would train on NaN
+        check_finite_weights({k: v for k, v in model.items() if isinstance(v, torch.Tensor)},
+                             f"training checkpoint '{path}'")
     return state

@@ -207,3 +207,25 @@ def count_macs(model: nn.Module) -> int:
         for handle in handles:
             handle.remove()
     return total
+
+
+def activation_bytes(model: nn.Module) -> int:
+    """Bytes of the outputs of every layer in one forward pass for one grasp: what a training step
+    keeps per image for the backward pass (measured with hooks on a dummy input, like `count_macs`)."""
+    total = 0
+
+    def hook(_module: nn.Module, _inputs, output: torch.Tensor) -> None:
+        nonlocal total
+        if isinstance(output, torch.Tensor):
+            total += output.numel() * output.element_size()
+
+    handles = [m.register_forward_hook(hook) for m in model.modules() if not list(m.children())]
+    try:
+        with torch.no_grad():
+            param = next(model.parameters())
+            model(torch.zeros(1, 1, IMAGE_SIZE, IMAGE_SIZE, device=param.device),
+                  torch.zeros(1, POSE_DIM, device=param.device))
+    finally:
+        for handle in handles:
+            handle.remove()
+    return total

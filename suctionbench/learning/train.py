@@ -66,9 +66,18 @@ from suctionbench.learning.data import (
     to_tensors,
 )
 from suctionbench.learning.metrics import average_precision, plot_precision_recall, precision_recall_curve
-from suctionbench.learning.models import ARCHITECTURES, build_model, count_macs, count_parameters
+from suctionbench.learning.models import ARCHITECTURES, activation_bytes, build_model, count_macs, count_parameters
 
 PR_CURVE_NAME = "precision_recall.png"
+
+TRAIN_BYTES_PER_ACTIVATION = 2.0
+"""Peak memory of a training step per byte of one image's layer outputs (`activation_bytes`): the
+outputs kept for the backward pass, their gradients and temporaries; measured 1.2-1.6 for dn3 and
+compact at batches of 1,024 and more (2.5 at 256, where the fixed costs weigh more)."""
+
+CHECKPOINT_BYTES_PER_PARAMETER = 20
+"""Disk per network parameter while training: the weights (4 bytes) and the resume state (model and
+momentum, 8 bytes), and temporary copies of both while each checkpoint replaces the last."""
 
 EVAL_BATCH = 1024
 """Datapoints per forward pass in validation (no gradients, so larger than the training batch)."""
@@ -343,6 +352,60 @@ def _train_epoch(session: _Session, data: SplitData, config: TrainConfig, thresh
     return {"loss": loss_mean, "accuracy": accuracy, "images": seen, "seconds": seconds}
 
 
+def _foreign_output(out_dir: Path) -> str | None:
+    """The first of the trainer's file names in `out_dir` held by a file suctionbench did not write,
+    else None. Proof of ownership: model.json is a card of the model format, model.safetensors
+    carries that format in its header, train_state.pt loads as a resume state; the PR curve is ours
+    beside any of those."""
+    from safetensors import SafetensorError, safe_open
+
+    from suctionbench.learning.checkpoint import CARD_FORMAT, read_model_card
+
+    if not out_dir.is_dir():
+        return None
+    present = {name for name in (CARD_NAME, WEIGHTS_NAME, STATE_NAME, PR_CURVE_NAME) if (out_dir / name).exists()}
+    ours = set()
+    if CARD_NAME in present:
+        try:
+            read_model_card(out_dir)
+            ours.add(CARD_NAME)
+        except InputError:
+            return CARD_NAME
+    if WEIGHTS_NAME in present:
+        try:
+            with safe_open(str(out_dir / WEIGHTS_NAME), framework="pt") as fh:
+                if (fh.metadata() or {}).get("format") != CARD_FORMAT:
+                    return WEIGHTS_NAME
+            ours.add(WEIGHTS_NAME)
+        except (SafetensorError, OSError, ValueError):
+            return WEIGHTS_NAME
+    if STATE_NAME in present:
+        try:
+            load_train_state(out_dir)
+            ours.add(STATE_NAME)
+        except InputError:
+            if not ours:  # a damaged resume state beside a model of ours is ours
+                return STATE_NAME
+    if PR_CURVE_NAME in present and not ours:
+        return PR_CURVE_NAME
+    return None
+
+
+def _check_sizes(config: TrainConfig, out_dir: Path, num_train: int, device: torch.device) -> None:
+    """InputError before any training if the checkpoints do not fit on the disk under `out_dir`, or
+    (on the CPU) a training batch does not fit in memory."""
+    from suctionbench.validate import require_disk, require_memory
+
+    network = build_model(config.arch)
+    existing = sum((out_dir / n).stat().st_size for n in (WEIGHTS_NAME, STATE_NAME) if (out_dir / n).is_file())
+    need = CHECKPOINT_BYTES_PER_PARAMETER * count_parameters(network) + 2**20 - existing
+    require_disk(out_dir, need, f"--arch {config.arch} checkpoints")
+    if device.type == "cpu":
+        batch = min(config.batch_size, num_train)
+        require_memory(batch * TRAIN_BYTES_PER_ACTIVATION * activation_bytes(network),
+                       f"--batch-size {batch} (--arch {config.arch})")
+
+
 def _remove_outputs(out_dir: Path) -> None:
     for name in (STATE_NAME, WEIGHTS_NAME, CARD_NAME, PR_CURVE_NAME):
         (out_dir / name).unlink(missing_ok=True)
@@ -374,6 +437,11 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
 
     if out_dir.exists() and not out_dir.is_dir():
         raise InputError(f"output '{out_dir}': exists and is not a directory")
+    foreign = _foreign_output(out_dir)
+    if foreign is not None:  # never replace (nor, with overwrite, delete) a file suctionbench did not write
+        raise InputError(f"output '{out_dir}': holds '{foreign}', which suctionbench did not write; nothing "
+                         "replaced (move it away or choose another --out)")
+    _check_sizes(config, out_dir, train_data.num_datapoints, device)
     if overwrite:
         _remove_outputs(out_dir)
     saved = load_train_state(out_dir)

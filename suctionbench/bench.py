@@ -44,9 +44,13 @@ def bench_label(
     from suctionbench.geometry.mesh import load_mesh
     from suctionbench.geometry.sampling import sample_surface_grasps
     from suctionbench.resources import asset_path
+    from suctionbench.validate import label_memory, require_memory
 
     if grasps < 1 or not 1 <= reference_grasps <= grasps or memory_grasps < 0:
         raise InputError("bench label: need grasps >= 1, 1 <= reference-grasps <= grasps, memory-grasps >= 0")
+    largest = max(grasps, memory_grasps)
+    require_memory(label_memory(largest, samples),
+                   f"--{'grasps' if largest == grasps else 'memory-grasps'} {largest} x --samples {samples}")
     used_cores = _limit_cores(cores)
     path = mesh or str(asset_path("meshes", "soap_bar.ply"))
     info = load_mesh(path)
@@ -246,7 +250,10 @@ def bench_plan(*, policies: list[str], model: str | None, scenes: int, seed: int
     from suctionbench.sim.pick import PickRequest, PickRunner
 
     used_cores = _limit_cores(cores)
-    records = list_objects("typical")[:: max(1, 25 // scenes)][:scenes]
+    typical = list_objects("typical")
+    if scenes > len(typical):
+        raise InputError(f"--scenes {scenes}: at most {len(typical)} (one scene per object of the typical set)")
+    records = typical[:: max(1, len(typical) // scenes)][:scenes]
     observations = []
     for i, record in enumerate(records):
         runner = PickRunner(PickRequest(record.key, seed=seed + i, record=record))

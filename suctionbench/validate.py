@@ -84,6 +84,10 @@ OPTION_RULES: dict[str, Rule] = {
 """Rule of each numeric CLI option, by parameter name. Every int or float option of every command
 must have one (tests/test_fuzz.py checks this); a float option is finite in any case."""
 
+SIZE_OPTIONS = frozenset({"trials", "datapoints", "grasps", "grasps_per_object", "samples", "epochs", "batch_size",
+                          "max_datapoints", "count", "scenes", "episodes", "memory_grasps", "reference_grasps"})
+"""The options that set how much work, memory or disk a command takes: named when memory runs out."""
+
 
 # -- sizes -----------------------------------------------------------------------------------------
 
@@ -153,6 +157,13 @@ BYTES_PER_TRIAL_LOG = 1.5e6
 BYTES_PER_LABEL = 160
 """Disk per grasp of `label --out`: its arrays uncompressed (points, approaches, seal diagnostics,
 contact point, four metrics: 132 bytes; the compressed file holds about a third of that)."""
+
+BYTES_PER_OBJECT = 2**20
+"""Disk per built object with its convex parts (mesh.stl, parts/, object.toml): the largest of the
+evaluation sets takes 0.6 MB."""
+
+BYTES_PER_CORPUS_OBJECT = 2**17
+"""Disk per training-corpus object (mesh and object.toml, no convex parts): up to about 70 KB."""
 
 
 def label_memory(grasps: int, samples: int) -> float:

@@ -235,10 +235,30 @@ def build_corpus(root: Path) -> dict[str, Path]:
     log = p["run_bad_log"] / "trials" / "trial_00001.mcap"
     log.write_bytes(log.read_bytes()[:-40])
 
+    # depth images, masks and camera poses (plan)
+    def array(name: str, value: np.ndarray, **kw) -> None:
+        p[name] = root / name
+        np.save(p[name], value, **kw)
+
+    array("depth_flat.npy", np.full((480, 640), 0.6, np.float32))
+    array("depth_nan.npy", np.full((480, 640), np.nan, np.float32))
+    array("depth_rgb.npy", np.full((8, 8, 3), 0.6, np.float32))
+    array("depth_pickle.npy", np.array([{"a": 1}], dtype=object), allow_pickle=True)
+    array("depth_mm_float.npy", np.full((480, 640), 600.0, np.float32))
+    array("mask_small.npy", np.ones((10, 10), bool))
+    array("pose_3x3.npy", np.eye(3))
+    array("pose_nan.npy", np.full((4, 4), np.nan))
+    text("garbage.npy", b"\x93NUMPY garbage" * 10)
+
     # directories holding a user's files where a command writes: nothing of theirs may go
     (root / "user_model").mkdir()
     p["user_model"] = root / "user_model"
     (p["user_model"] / "model.json").write_text('{"my": "own model card"}\n')
+    p["user_objects"] = root / "user_objects_root"
+    (p["user_objects"] / "basic" / "box_tea").mkdir(parents=True)
+    (p["user_objects"] / "basic" / "box_tea" / "notes.txt").write_text("my notes\n")
+    (p["user_objects"] / "custom" / "box").mkdir(parents=True)
+    (p["user_objects"] / "custom" / "box" / "notes.txt").write_text("my notes\n")
     return p
 
 
@@ -256,7 +276,7 @@ def _notes_dir(path: Path) -> Callable[[], None]:
 
 
 def cases(p: dict[str, Path]) -> list[Case]:
-    """The bad command lines, grouped by command (about 190)."""
+    """The bad command lines, grouped by command (about 250)."""
     r = p["root"]
     out: list[Case] = []
 
@@ -403,11 +423,39 @@ def cases(p: dict[str, Path]) -> list[Case]:
         add("objects import", "objects", "import", *argv, "--root", r / "user_objects")
     for key in ("nope/x", "../../etc", "basic"):
         add("objects show", "objects", "show", key)
+    add("objects build", "objects", "build", "--set", "basic", "--workers", "1", "--out", p["user_objects"],
+        keep=[p["user_objects"] / "basic" / "box_tea" / "notes.txt"])
+    add("objects import", "objects", "import", box, "--root", p["user_objects"], "--overwrite",
+        keep=[p["user_objects"] / "custom" / "box" / "notes.txt"])
+    add("objects stats", "objects", "stats", "--set", "basic", "--grasps", "1000000000")
+    add("objects generate", "objects", "generate", "--count", "1000000000", "--workers", "1",
+        "--out", r / "corpus_huge")
+    add("bench label", "bench", "label", "--grasps", "10", "--reference-grasps", "1", "--memory-grasps", "1000000000")
+    add("bench agreement", "bench", "agreement", "--trials", "1000000000", "--workers", "1")
+    add("bench plan", "bench", "plan", "--policies", "centroid", "--scenes", "1000")
 
     # train into a directory holding a model card it did not write, with and without --overwrite
     for extra in ([], ["--overwrite"]):
         add("train", *t, "--dataset", p["ds_good"], "--out", p["user_model"], *extra,
             keep=[p["user_model"] / "model.json"])
+
+    # plan: depth images, masks, camera poses, cameras and outputs
+    d = ["plan", "--camera", "primesense", "--policy", "centroid", "--depth"]
+    for name in ("depth_nan.npy", "depth_rgb.npy", "depth_pickle.npy", "depth_mm_float.npy", "garbage.npy",
+                 "file.txt", "mesh_empty.obj"):
+        add("plan", *d, p[name])
+    add("plan", *d, r / "missing.npy")
+    for argv in (["--mask", p["mask_small.npy"]], ["--mask", r / "missing.npy"], ["--camera-pose", p["pose_3x3.npy"]],
+                 ["--camera-pose", p["pose_nan.npy"]], ["--camera-pose", p["file.txt"]], ["--policy", "nope"],
+                 ["--policy-arg", "junk"], ["--out", p["file.txt"] / "x.png"], ["--out", p["a_dir"]],
+                 ["--camera", p["cam_huge.toml"]], ["--camera", p["cam_binary.toml"]], ["--camera", "nope"],
+                 ["--model", p["model_nan"], "--policy", "gqcnn"], ["--depth-scale", "0"]):
+        add("plan", *d, p["depth_flat.npy"], *argv)
+
+    # cameras
+    for spec in ("nope", p["cam_binary.toml"], p["cam_nan.toml"], p["cam_huge.toml"], p["cam_types.toml"],
+                 r / "missing.toml"):
+        add("cameras", "cameras", "--toml", spec)
     return out
 
 

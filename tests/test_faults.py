@@ -459,6 +459,50 @@ def test_save_model_on_a_full_disk_names_the_weights(full_disk):
     assert not list((full_disk / "m").iterdir())
 
 
+# -- every output on a full disk and on a read-only file system ------------------------------------
+
+
+OUTPUTS = {  # command line writing to {d} (a directory on the small file system), inputs from the corpus
+    "label --out": ["label", "{box}", "--grasps", "50", "--samples", "2", "--mass", "0.1", "--out", "{d}/l.npz"],
+    "generate": ["generate", "--objects", "basic", "--datapoints", "4", "--workers", "1", "--out", "{d}/ds"],
+    "eval": ["eval", "--policy", "centroid", "--set", "basic", "--trials", "1", "--workers", "1", "--out", "{d}/run"],
+    "train": ["train", "--dataset", "{ds_good}", "--out", "{d}/model", "--arch", "compact", "--epochs", "1"],
+    "report": ["report", "{run_good}", "--out", "{d}/report"],
+    "objects build": ["objects", "build", "--set", "adversarial", "--workers", "1", "--out", "{d}/objects"],
+    "objects import": ["objects", "import", "{box}", "--root", "{d}/user"],
+    "objects generate": ["objects", "generate", "--count", "2", "--workers", "1", "--out", "{d}/corpus"],
+    "dataset show --thumbnails": ["dataset", "show", "{ds_good}", "--thumbnails", "{d}/t.png"],
+    "pick --log": ["pick", "--object", "basic/box_tea", "--log", "{d}/e.mcap"],
+    "plan --out": ["plan", "--depth", "{depth}", "--camera", "primesense", "--policy", "centroid",
+                   "--out", "{d}/p.png"],
+}
+
+
+@pytest.fixture(scope="module")
+def corpus(tmp_path_factory):
+    from fuzz_corpus import build_corpus
+
+    return build_corpus(tmp_path_factory.mktemp("faults") / "corpus")
+
+
+@pytest.mark.parametrize("kind", ["full", "read-only"])
+@pytest.mark.parametrize("name", list(OUTPUTS))
+def test_every_output_on_a_full_or_read_only_disk(name, kind, corpus, tmp_path, request):
+    """Each command that writes, pointed at a full or a read-only file system, is refused before its
+    work (the size estimate, the write check) with one line naming the path, and writes nothing
+    there: no partial output, no temporary file, no empty directory."""
+    disk = request.getfixturevalue("full_disk" if kind == "full" else "read_only_dir")
+    argv = [a.format(d=disk, depth=corpus["depth_flat.npy"], **corpus) for a in OUTPUTS[name]]
+    start = time.monotonic()
+    result = runner.invoke(app, [*argv, "--json"])
+    assert result.exit_code == 2, (result.exit_code, result.stderr[-2000:])
+    assert len(result.stderr.strip().splitlines()) == 1 and "Traceback" not in result.stderr, result.stderr
+    error = json.loads(result.stdout.splitlines()[-1])["error"]
+    assert str(disk) in error, error
+    assert sorted(p.name for p in disk.iterdir()) == (["filler"] if kind == "full" else []), error
+    assert time.monotonic() - start < 20  # refused up front, not after the work (objects build: minutes)
+
+
 # -- interrupted runs and failing tasks ------------------------------------------------------------
 
 

@@ -220,7 +220,8 @@ CORPUS_NAMES = [
     "ds_empty_card", "ds_bad_card", "ds_no_card", "ds_no_splits", "ds_nan", "model_good", "model_nan",
     "model_truncated", "model_bad_card", "model_no_weights", "model_empty", "run_good", "run_killed", "run_killed0",
     "run_extra", "run_truncated_json", "run_list_json", "run_empty_json", "run_no_trials", "run_bad_log",
-    "user_model",
+    "depth_flat.npy", "depth_nan.npy", "depth_rgb.npy", "depth_pickle.npy", "depth_mm_float.npy", "mask_small.npy",
+    "pose_3x3.npy", "pose_nan.npy", "garbage.npy", "user_model", "user_objects",
 ]
 
 
@@ -327,3 +328,90 @@ def test_a_nan_training_checkpoint_is_refused(tmp_path):
         load_train_state(tmp_path)
     save_train_state(tmp_path, {"model": {"w": torch.tensor([1.0, 2.0])}})
     assert load_train_state(tmp_path)["format"] == STATE_FORMAT
+
+
+def test_objects_never_replace_a_directory_holding_user_files(corpus, tmp_path):
+    """objects build --out and objects import --overwrite replace object directories: one holding a
+    file suctionbench did not write (or no object at all) is refused before any work, untouched."""
+    from suctionbench.cli.objects import foreign_object_entry
+    from suctionbench.objects.registry import assets_root, eval_specs
+
+    root = corpus["user_objects"]
+    result = runner.invoke(app, ["objects", "build", "--set", "basic", "--out", str(root), "--json"])
+    assert_clean_exit_2(result, as_json=True, needle="basic/box_tea': holds no object.toml of suctionbench")
+    result = runner.invoke(app, ["objects", "import", str(corpus["box"]), "--root", str(root), "--overwrite", "--json"])
+    assert_clean_exit_2(result, as_json=True, needle="custom/box': holds no object.toml of suctionbench")
+    assert (root / "basic" / "box_tea" / "notes.txt").is_file() and (root / "custom" / "box" / "notes.txt").is_file()
+    mine = tmp_path / "objects"  # an object suctionbench imported, then a note of the user's put into it
+    imported = ["objects", "import", str(corpus["box"]), "--root", str(mine), "--json"]
+    assert runner.invoke(app, imported).exit_code == 0
+    (mine / "custom" / "box" / "notes.txt").write_text("mine")
+    result = runner.invoke(app, [*imported, "--overwrite"])
+    assert_clean_exit_2(result, as_json=True, needle="custom/box': holds 'notes.txt', which suctionbench did not write")
+    (mine / "custom" / "box" / "notes.txt").unlink()
+    assert runner.invoke(app, [*imported, "--overwrite"]).exit_code == 0  # its own object: replaced
+    # positive control: every shipped object is one suctionbench wrote (objects build may replace it)
+    assert [s.name for g in eval_specs().values() for s in g if foreign_object_entry(assets_root() / s.set / s.name)] \
+        == []
+
+
+def test_dataset_show_thumbnails_of_a_small_dataset(tmp_path):
+    """Fewer than 16 datapoints: the sheet shows them all (it sampled 16 without replacement)."""
+    from fuzz_corpus import write_dataset
+
+    dataset = write_dataset(tmp_path / "ds", n=5, per_shard=5)
+    result = runner.invoke(app, ["dataset", "show", str(dataset), "--thumbnails", str(tmp_path / "t.png"), "--json"])
+    assert result.exit_code == 0, result.stderr[-1500:]
+    assert (tmp_path / "t.png").stat().st_size > 0
+
+
+def test_library_warnings_do_not_break_the_one_line(capsys):
+    """A library's warning during a refused command is held back (one error line); during a success
+    it is printed after the work, once."""
+    import warnings
+
+    from suctionbench.cli.common import run_command
+    from suctionbench.errors import InputError
+
+    def refused():
+        warnings.warn("invalid value encountered in cast", RuntimeWarning, stacklevel=1)
+        raise InputError("mesh 'm.stl': degenerate")
+
+    def succeeds():
+        for _ in range(3):
+            warnings.warn("invalid value encountered in cast", RuntimeWarning, stacklevel=1)
+        return {"done": 1}
+
+    with pytest.raises(typer.Exit):
+        run_command(False, refused)
+    assert capsys.readouterr().err.strip().splitlines() == ["error: mesh 'm.stl': degenerate"]
+    run_command(True, succeeds)
+    captured = capsys.readouterr()
+    assert strict_json(captured.out) == {"ok": True, "done": 1}
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("warning: RuntimeWarning: invalid value encountered in cast")
+
+
+TORCH_ALLOCATION_FAILURE = ("[enforce fail at alloc_cpu.cpp:127] DefaultCPUAllocator: can't allocate memory: you "
+                            "tried to allocate 3435921408 bytes. Error code 12 (Cannot allocate memory)")
+
+
+@pytest.mark.parametrize("error", [MemoryError(), RuntimeError(TORCH_ALLOCATION_FAILURE)])
+def test_out_of_memory_names_the_sizes(error, box_mesh_path, monkeypatch):
+    """Memory exhausted despite the estimates (numpy's MemoryError, torch's failed allocation): exit 2,
+    one line naming the command's size options and their values."""
+    def exhausted(*_a, **_k):
+        raise error
+
+    monkeypatch.setattr("suctionbench.geometry.sampling.sample_surface_grasps", exhausted)
+    result = runner.invoke(app, ["label", str(box_mesh_path), "--grasps", "7", "--mass", "0.1", "--json"])
+    assert_clean_exit_2(result, as_json=True, needle="out of memory with --grasps 7 --samples 50")
+
+
+@pytest.fixture
+def box_mesh_path(tmp_path):
+    import trimesh
+
+    path = tmp_path / "box.stl"
+    trimesh.creation.box(extents=(0.06, 0.04, 0.02)).export(path)
+    return path

@@ -11,8 +11,10 @@ import json
 import os
 import sys
 import traceback
+import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Annotated, Any, get_args
 
 import numpy as np
@@ -26,7 +28,7 @@ from typer.core import _click
 
 from suctionbench.errors import InputError
 from suctionbench.io import WRITE_ERRNOS, json_safe
-from suctionbench.validate import OPTION_RULES, Rule, os_error_message
+from suctionbench.validate import OPTION_RULES, SIZE_OPTIONS, Rule, os_error_message
 
 FINITE = Rule()
 """A float option without a rule of its own is still finite."""
@@ -136,33 +138,75 @@ def error_line(message: str, kind: str = "error") -> None:
     err.print(Text.assemble((f"{kind}:", "bold red"), " ", " ".join(str(message).split())), highlight=False)
 
 
-def run_command(as_json: bool, body: Callable[[], dict[str, Any]]) -> None:
+def run_command(as_json: bool, body: Callable[[], dict[str, Any]], *, output: str | None = None) -> None:
     """Run a command body under the CLI contract (exit codes, JSON on the last line).
 
     Bad input (`InputError`), and a file system that refuses a write or a read (disk full, no
-    permission, read-only, a file where a directory must be: an `OSError` with a path), exit 2
-    with one line naming the path; memory exhausted despite the size checks exits 2 too. Anything
-    else is an internal failure: exit 1 with the traceback on stderr.
+    permission, read-only, a file where a directory must be: an `OSError`), exit 2 with one line
+    naming the path: the error's own, else `output` (what the command writes, e.g. "--out 'runs/a'"),
+    for a write error that carries none. Memory exhausted despite the size checks (MemoryError, or a
+    tensor allocation that fails) exits 2 naming the command's size options. Anything else is an
+    internal failure: exit 1 with the traceback on stderr.
+
+    Python warnings raised while the body runs (numerical warnings of a library, say) are held
+    back: a refused input prints its one error line only; a success prints them after its work,
+    one line each.
     """
-    try:
-        result = body()
-    except typer.Exit:
-        raise
-    except InputError as exc:
-        fail_input(str(exc), as_json)
-    except OSError as exc:
-        if exc.filename is None and exc.errno not in WRITE_ERRNOS:  # not about a file or a full disk: a bug
+    with warnings.catch_warnings(record=True) as caught:
+        try:
+            result = body()
+        except typer.Exit:
+            raise
+        except InputError as exc:
+            fail_input(str(exc), as_json)
+        except OSError as exc:
+            if exc.filename is None and exc.errno not in WRITE_ERRNOS:  # not about a file or a full disk: a bug
+                _print_warnings(caught)
+                fail_internal(exc, as_json)
+            message = os_error_message(exc)
+            fail_input(f"{output}: {message}" if output and exc.filename is None else message, as_json)
+        except MemoryError:
+            fail_input(_out_of_memory(), as_json)
+        except KeyboardInterrupt:  # Ctrl-C: one line (and the JSON line), exit 130 as shells expect
+            error_line("interrupted (Ctrl-C)")
+            emit({"ok": False, "error": "interrupted"}, as_json)
+            raise typer.Exit(130) from None
+        except Exception as exc:  # an internal failure: say so, with the traceback on stderr
+            if _is_allocation_failure(exc):
+                fail_input(_out_of_memory(), as_json)
+            _print_warnings(caught)
             fail_internal(exc, as_json)
-        fail_input(os_error_message(exc), as_json)
-    except MemoryError:
-        fail_input("out of memory (use smaller sizes)", as_json)
-    except KeyboardInterrupt:  # Ctrl-C: one line (and the JSON line), exit 130 as shells expect
-        error_line("interrupted (Ctrl-C)")
-        emit({"ok": False, "error": "interrupted"}, as_json)
-        raise typer.Exit(130) from None
-    except Exception as exc:  # an internal failure: say so, with the traceback on stderr
-        fail_internal(exc, as_json)
+    _print_warnings(caught)
     emit({"ok": True, **result}, as_json)
+
+
+def _print_warnings(caught: list[warnings.WarningMessage]) -> None:
+    seen = set()
+    for w in caught:
+        line = f"{w.category.__name__}: {' '.join(str(w.message).split())} ({Path(w.filename).name}:{w.lineno})"
+        if line not in seen:
+            seen.add(line)
+            err.print(Text.assemble(("warning:", "yellow"), " ", line), highlight=False)
+
+
+def _is_allocation_failure(exc: BaseException) -> bool:
+    """A tensor library's failed allocation (torch raises RuntimeError, not MemoryError)."""
+    text = str(exc).lower()
+    return isinstance(exc, RuntimeError) and ("can't allocate memory" in text or "out of memory" in text)
+
+
+def _out_of_memory() -> str:
+    """The out-of-memory message, naming the size options of the running command and their values."""
+    from typer._click.globals import get_current_context
+
+    ctx = get_current_context(silent=True)
+    sizes = []
+    if ctx is not None:
+        for param in ctx.command.params:
+            value = ctx.params.get(param.name or "")
+            if param.name in SIZE_OPTIONS and value is not None and param.opts:
+                sizes.append(f"{param.opts[0]} {value}")
+    return f"out of memory with {' '.join(sizes)} (use smaller sizes)" if sizes else "out of memory (use smaller sizes)"
 
 
 def fail_input(message: str, as_json: bool) -> None:

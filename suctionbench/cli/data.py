@@ -75,7 +75,9 @@ def generate(
 @dataset_app.command("show")
 def dataset_show(
     directory: Annotated[Path, typer.Argument(help="Dataset directory.")],
-    thumbnails: Annotated[Path | None, typer.Option(help="Save 16 thumbnails with labels to this PNG.")] = None,
+    thumbnails: Annotated[
+        Path | None, typer.Option(help="Save 16 thumbnails (all, if fewer) with labels to this PNG.")
+    ] = None,
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
@@ -101,7 +103,8 @@ def dataset_show(
 
             shard = reader.shard(0)
             rng = np.random.default_rng(seed)
-            pick = rng.choice(len(shard["robust_suction_wrench_resistance"]), size=16, replace=False)
+            size = len(shard["robust_suction_wrench_resistance"])
+            pick = rng.choice(size, size=min(16, size), replace=False)  # a dataset may hold fewer than 16
             labels = shard["robust_suction_wrench_resistance"][pick] > summary["threshold"]
             save_png(thumbnails, to_uint8_grid(shard["depth_ims_tf_table"][pick, ..., 0], labels))
             summary["thumbnails"] = str(thumbnails)

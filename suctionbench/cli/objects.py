@@ -23,6 +23,44 @@ from suctionbench.cli.common import (
     run_command,
 )
 from suctionbench.errors import InputError
+from suctionbench.validate import BYTES_PER_CORPUS_OBJECT, BYTES_PER_OBJECT, output_dir, require_disk
+
+
+def foreign_object_entry(directory: Path) -> str | None:
+    """Why `directory`, which `objects build` or `objects import --overwrite` would replace, may hold
+    something suctionbench did not write; None if it is absent or an object as suctionbench writes
+    it: an object.toml that loads, mesh.stl, and parts/part_NNN.stl (replacing it loses nothing)."""
+    import re
+
+    from suctionbench.objects.build import ObjectRecord
+
+    if not directory.exists() and not directory.is_symlink():
+        return None
+    if directory.is_symlink() or not directory.is_dir():
+        return "is not a directory"
+    try:
+        ObjectRecord.load(directory)
+    except (InputError, TypeError, ValueError, OSError):
+        return "holds no object.toml of suctionbench"
+    for entry in sorted(directory.iterdir()):
+        stray = entry
+        if entry.name == "parts" and entry.is_dir() and not entry.is_symlink():
+            stray = next((p for p in sorted(entry.iterdir())
+                          if p.is_symlink() or not p.is_file() or not re.fullmatch(r"part_\d{3,}\.stl", p.name)), None)
+        elif entry.name in ("object.toml", "mesh.stl") and entry.is_file() and not entry.is_symlink():
+            stray = None
+        if stray is not None:
+            return f"holds '{stray.relative_to(directory)}', which suctionbench did not write"
+    return None
+
+
+def check_replaceable_objects(directories: list[Path]) -> None:
+    """InputError naming the first of `directories` that may hold something suctionbench did not write."""
+    for directory in directories:
+        reason = foreign_object_entry(directory)
+        if reason is not None:
+            raise InputError(f"object directory '{directory}': {reason}; nothing replaced (move it away or "
+                             "choose another --out / --root)")
 
 
 @objects_app.command("list")
@@ -86,16 +124,18 @@ def objects_build(
         if set_name is not None and set_name not in sets:
             raise InputError(f"object set '{set_name}' is unknown (known: {', '.join(sets)})")
         specs = [s for name, group in sets.items() if set_name in (None, name) for s in group]
+        root = output_dir(out or assets_root(), "--out")
+        check_replaceable_objects([root / spec.set / spec.name for spec in specs])
+        require_disk(root, len(specs) * BYTES_PER_OBJECT, f"{len(specs)} objects")
         start = time.perf_counter()
         with progress_bar(len(specs), "building", not as_json) as advance:
-            records = build_specs(specs, out or assets_root(), workers=workers, reuse_parts=reuse_parts,
-                                  progress=advance)
+            records = build_specs(specs, root, workers=workers, reuse_parts=reuse_parts, progress=advance)
         rows = [record_row(r) for r in records]
         if not as_json:
             print_rows("built", rows)
         return {"built": len(records), "seconds": round(time.perf_counter() - start, 1), "objects": rows}
 
-    run_command(as_json, body)
+    run_command(as_json, body, output=f"--out '{out}'" if out is not None else "the shipped assets")
 
 
 @objects_app.command("stats")
@@ -110,12 +150,15 @@ def objects_stats(
     straight down) and mass; and the mass cap with its derivation."""
 
     def body() -> dict[str, Any]:
+        from suctionbench.config import LabelConfig
         from suctionbench.objects.registry import list_objects
         from suctionbench.objects.spec import SETS
         from suctionbench.objects.stats import pick_criteria, set_stats, stats_rows
+        from suctionbench.validate import label_memory, require_memory
 
         if grasps < 1:
             raise InputError(f"--grasps {grasps}: must be at least 1")
+        require_memory(label_memory(grasps, LabelConfig().perturbation.num_samples), f"--grasps {grasps}")
         sets = [set_name] if set_name else list(SETS)
         result = {}
         for name in sets:
@@ -154,10 +197,21 @@ def objects_import(
     holes closed; each defect it cannot repair named), decompose, compute stable poses."""
 
     def body() -> dict[str, Any]:
-        from suctionbench.objects.importer import import_mesh
+        from suctionbench.objects.importer import NAME_PATTERN, import_mesh
+        from suctionbench.objects.registry import set_dir
 
+        object_name = name or Path(path).stem.lower()
+        if root is not None:
+            output_dir(root, "--root")
+        if NAME_PATTERN.match(set_name) and NAME_PATTERN.match(object_name):  # else import_mesh says what is wrong
+            target = (root / set_name if root else set_dir(set_name)) / object_name
+            if overwrite:
+                check_replaceable_objects([target])
+            size = Path(path).stat().st_size if Path(path).is_file() else 0
+            what = "--root" if root is not None else "object directory"
+            require_disk(output_dir(target, what), 3 * size + BYTES_PER_OBJECT, f"mesh '{path}' imported")
         record = import_mesh(
-            path, set_name=set_name, name=name or Path(path).stem.lower(), units=units, scale=scale, mass=mass,
+            path, set_name=set_name, name=object_name, units=units, scale=scale, mass=mass,
             try_repair=repair, overwrite=overwrite, root=root,
         )
         row = record_row(record)
@@ -168,7 +222,7 @@ def objects_import(
                 err.print(f"repaired: {note}", highlight=False)
         return {**row, "directory": str(record.directory), "scale": record.scale, "repairs": repairs}
 
-    run_command(as_json, body)
+    run_command(as_json, body, output=f"--root '{root}'" if root is not None else "the user object root")
 
 
 @objects_app.command("generate")
@@ -186,10 +240,14 @@ def objects_generate(
 
         if count < 1:
             raise InputError(f"--count {count}: must be at least 1")
+        output_dir(out, "--out")
+        train = out / "train"
+        cached = sum(1 for p in train.iterdir() if not p.name.startswith(".")) if train.is_dir() else 0
+        require_disk(out, max(count - cached, 0) * BYTES_PER_CORPUS_OBJECT, f"--count {count}")
         with progress_bar(count, "generating", not as_json) as advance:
             summary = generate_corpus(count, seed, out, workers=resolve_workers(workers), progress=advance)
         if not as_json:
             print_rows("corpus", [{k: v for k, v in summary.items() if not isinstance(v, dict)}])
         return summary
 
-    run_command(as_json, body)
+    run_command(as_json, body, output=f"--out '{out}'")

@@ -148,6 +148,10 @@ def summarize(rows: list[dict[str, Any]], threshold: float, tolerance_deg: float
     return out
 
 
+BYTES_PER_TRIAL_ROW = 4096
+"""Memory per trial of the study: its result row (about 20 entries) and its share of the tables."""
+
+
 def run_agreement(*, sets: tuple[str, ...] = SETS, trials: int = 1000, seed: int = 0, threshold: float = 0.5,
                   workers: int = 1) -> dict[str, Any]:
     """The agreement study over `sets`: `trials` grasps in total, split over the sets in proportion
@@ -155,10 +159,12 @@ def run_agreement(*, sets: tuple[str, ...] = SETS, trials: int = 1000, seed: int
     from suctionbench.config import CUP_DEFAULT
     from suctionbench.objects.registry import list_objects
     from suctionbench.parallel import map_ordered
+    from suctionbench.validate import require_memory
 
     if trials < 1 or not 0.0 <= threshold <= 1.0 or workers < 1:
         raise InputError(f"bench agreement: need --trials >= 1, 0 <= --threshold <= 1 and --workers >= 1 "
                          f"(got {trials}, {threshold}, {workers})")
+    require_memory(trials * BYTES_PER_TRIAL_ROW, f"--trials {trials}")  # every trial's row is kept
     records = {s: list_objects(s) for s in sets}
     total = sum(len(r) for r in records.values())
     tasks = []

@@ -8,8 +8,8 @@ in a forked child under a time and memory limit, with and without --json):
 
 Outcomes: ``clean`` exit 2, no traceback, one stderr line (and under --json a strict JSON last
 line with ok false); ``messy`` exit 2 but several stderr lines or a bad JSON line; ``crash`` any
-other non-zero exit or a traceback; ``wrong`` exit 0, a run past the time limit, or a case whose
-files were changed (data loss).
+other non-zero exit or a traceback; ``wrong`` exit 0, a run past the time limit, a case whose
+files were changed (data loss), or a refused case that wrote anything under the corpus directory.
 """
 
 from __future__ import annotations
@@ -500,6 +500,22 @@ def _snapshot(paths: list[Path]) -> list[bytes | None]:
     return [path.read_bytes() if path.is_file() else None for path in paths]
 
 
+def tree(root: Path) -> set[Path]:
+    """Every path under `root` (to find what a refused command wrote)."""
+    return set(root.rglob("*"))
+
+
+def remove_new(root: Path, before: set[Path]) -> list[Path]:
+    """Delete what appeared under `root` since `before` (so cases stay independent); returns it."""
+    new = sorted(tree(root) - before, key=lambda path: len(path.parts))
+    for path in reversed(new):
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path, ignore_errors=True)
+        else:
+            path.unlink(missing_ok=True)
+    return new
+
+
 def run_forked(argv: list[str], timeout: float, mem_bytes: int) -> tuple[int, str, str]:
     """Run the CLI in a forked child (imports already done) with its own session, time and memory
     limit; returns (exit code, stdout, stderr); code -9 after the time limit."""
@@ -589,11 +605,13 @@ def main() -> None:
             clear_outputs(case, paths)
             if case.setup:
                 case.setup()
-            before = _snapshot(case.keep)
+            before, files = _snapshot(case.keep), tree(paths["root"])
             t0 = time.perf_counter()
             code, stdout, stderr = run_forked(case.argv + (["--json"] if as_json else []), args.timeout,
                                               6 * 2**30)
             changed = _snapshot(case.keep) != before
+            written = remove_new(paths["root"], files)
+            changed = changed or (bool(written) and code != 0)  # a refused command writes nothing
             outcome = classify(code, stdout, stderr, as_json, changed)
             row = table.setdefault(case.command, {"cases": 0, "clean": 0, "messy": 0, "crash": 0, "wrong": 0})
             row["cases"] += 1

@@ -1,6 +1,6 @@
 """The CLI contract under bad input (issue 14): every bad option value or malformed file exits 2
-with one stderr line naming the input, no traceback, a strict JSON error line under --json, and
-nothing of the user's written over or deleted.
+with one stderr line naming the input, no traceback, a strict JSON error line under --json, nothing
+written, and nothing of the user's written over or deleted.
 
 Two sources of bad input: Hypothesis draws values that break each numeric option's rule
 (`suctionbench.validate.OPTION_RULES`) for every command, and `fuzz_corpus` builds malformed meshes,
@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import typer
-from fuzz_corpus import build_corpus, cases, classify
+from fuzz_corpus import build_corpus, cases, classify, remove_new, tree
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
@@ -235,11 +235,12 @@ def test_corpus_case_exits_2_and_keeps_files(corpus, index, as_json):
     case = cases(corpus)[index]
     if case.setup:
         case.setup()
-    before = [p.read_bytes() for p in case.keep]
+    before, files = [p.read_bytes() for p in case.keep], tree(corpus["root"])
     result = runner.invoke(app, case.argv + (["--json"] if as_json else []))
     changed = [p.read_bytes() if p.is_file() else None for p in case.keep] != before
-    outcome = classify(result.exit_code, result.stdout, result.stderr, as_json, changed)
-    assert outcome == "clean", (outcome, result.exit_code, case.name, result.stderr[-1500:])
+    written = remove_new(corpus["root"], files)  # a refused command writes nothing
+    outcome = classify(result.exit_code, result.stdout, result.stderr, as_json, changed or bool(written))
+    assert outcome == "clean", (outcome, result.exit_code, case.name, written[:3], result.stderr[-1500:])
 
 
 @pytest.mark.parametrize("argv", [

@@ -351,9 +351,21 @@ def test_objects_never_replace_a_directory_holding_user_files(corpus, tmp_path):
     assert_clean_exit_2(result, as_json=True, needle="custom/box': holds 'notes.txt', which suctionbench did not write")
     (mine / "custom" / "box" / "notes.txt").unlink()
     assert runner.invoke(app, [*imported, "--overwrite"]).exit_code == 0  # its own object: replaced
-    # positive control: every shipped object is one suctionbench wrote (objects build may replace it)
+    # positive controls: every shipped object is one suctionbench wrote (objects build may replace it),
+    # also once its record is of another version (a field gone, one added: a rebuild after the format changed)
     assert [s.name for g in eval_specs().values() for s in g if foreign_object_entry(assets_root() / s.set / s.name)] \
         == []
+    import shutil
+    import tomllib
+
+    import tomli_w
+
+    old = tmp_path / "old" / "box_tea"
+    shutil.copytree(assets_root() / "basic" / "box_tea", old)
+    record = tomllib.loads((old / "object.toml").read_text())
+    record.pop("mass_model", None)
+    (old / "object.toml").write_text(tomli_w.dumps({**record, "retired_field": 1}))
+    assert foreign_object_entry(old) is None
 
 
 def test_dataset_show_thumbnails_of_a_small_dataset(tmp_path):

@@ -29,18 +29,21 @@ from suctionbench.validate import BYTES_PER_CORPUS_OBJECT, BYTES_PER_OBJECT, out
 def foreign_object_entry(directory: Path) -> str | None:
     """Why `directory`, which `objects build` or `objects import --overwrite` would replace, may hold
     something suctionbench did not write; None if it is absent or an object as suctionbench writes
-    it: an object.toml that loads, mesh.stl, and parts/part_NNN.stl (replacing it loses nothing)."""
+    it: an object.toml with an object record's identity (name, generator, geometry hash; any version
+    of the record, so a rebuild after the record changed still replaces it), mesh.stl, and
+    parts/part_NNN.stl (replacing it loses nothing)."""
     import re
-
-    from suctionbench.objects.build import ObjectRecord
+    import tomllib
 
     if not directory.exists() and not directory.is_symlink():
         return None
     if directory.is_symlink() or not directory.is_dir():
         return "is not a directory"
     try:
-        ObjectRecord.load(directory)
-    except (InputError, TypeError, ValueError, OSError):
+        record = tomllib.loads((directory / "object.toml").read_text())
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        record = None
+    if not isinstance(record, dict) or not {"name", "generator", "geometry_hash"} <= set(record):
         return "holds no object.toml of suctionbench"
     for entry in sorted(directory.iterdir()):
         stray = entry

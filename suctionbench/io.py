@@ -1,5 +1,13 @@
 """Atomic writes: a reader never sees a half-written file or directory, an interrupted run leaves
-none in place of the output (files: temp file + rename; directories: temp sibling + rename)."""
+none in place of the output (files: temp file + rename; directories: temp sibling + rename).
+
+Every temporary sibling names its output and its writer: ``.NAME.PID-HOST.XXXXXXXX.tmp`` (a
+file; ``.part``: an episode log, suctionbench.runlog.writer), ``.NAME.PID-HOST.XXXXXXXX.partial``
+(a directory being written), ``.NAME.replaced-PID-HOST`` (the old output, while the new one takes
+its place); HOST is a short hash of the host's name. A process killed with SIGKILL cannot delete
+its own; the next write of the same output does (`remove_stale_temporaries`): only those of that
+output, and only where their writer is a process of this host that no longer exists.
+"""
 
 from __future__ import annotations
 
@@ -8,7 +16,9 @@ import errno
 import hashlib
 import math
 import os
+import re
 import shutil
+import socket
 import tempfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -25,7 +35,8 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     path = Path(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        remove_stale_temporaries(path)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{writer_tag()}.", suffix=".tmp", dir=path.parent)
     except OSError as exc:
         raise InputError(f"output '{path}': cannot write there ({os_error_reason(exc)})") from None
     os.close(fd)
@@ -44,6 +55,100 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
             raise InputError(f"output '{path}': cannot write there ({os_error_reason(exc)})") from None
     finally:
         tmp_path.unlink(missing_ok=True)
+
+
+_HOST = hashlib.sha256(socket.gethostname().encode()).hexdigest()[:6]
+
+
+def writer_tag() -> str:
+    """'PID-HOST': this process and (a hash of) its host, written into the names of its temporaries."""
+    return f"{os.getpid()}-{_HOST}"
+
+
+def _temporary_pattern(name: str) -> re.Pattern[str]:
+    """The names of the temporaries of output `name` (see the module's doc), with their writer."""
+    writer = r"(?P<{0}pid>[1-9]\d{{0,6}})-(?P<{0}host>[0-9a-f]{{6}})"  # pids have at most 7 digits (pid_max)
+    temporary = rf"{writer.format('')}\.[a-z0-9_]+\.(?P<kind>tmp|part|partial)"  # a random part
+    return re.compile(rf"\.{re.escape(name)}\.(?:{temporary}|replaced-{writer.format('old_')})")
+
+
+def _writer_gone(pid: int, host: str) -> bool:
+    """True if the writer `pid` on `host` has certainly ended: a process of this host that is not
+    running (a process of another host, or of another user, is never judged)."""
+    if host != _HOST or pid == os.getpid():
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except (OSError, OverflowError):  # PermissionError: it runs, as another user
+        return False
+    return False
+
+
+def remove_stale_temporaries(out: str | Path) -> list[Path]:
+    """Delete the temporaries of output `out` that a killed writer left beside it (a .tmp or .part
+    file, a .partial directory, a replaced-... old output), and return them. Only names of this output's
+    temporaries are touched, only plain files and directories (never a symbolic link), and only
+    where their writer, a process of this host, no longer exists. An old output whose writer died
+    before the new one took its place (`out` is missing) is put back as `out` instead of deleted."""
+    out = Path(out)
+    pattern = _temporary_pattern(out.name)
+    prefix = f".{out.name}."
+    removed = []
+    try:
+        with os.scandir(out.parent) as scan:
+            entries = sorted((e for e in scan if e.name.startswith(prefix)), key=lambda e: e.name)
+    except OSError:
+        return removed
+    for entry in entries:
+        match = pattern.fullmatch(entry.name)
+        if match is None or entry.is_symlink():
+            continue
+        kind = match["kind"] or "replaced"
+        pid, host = (match["pid"], match["host"]) if match["kind"] else (match["old_pid"], match["old_host"])
+        if not _writer_gone(int(pid), host):
+            continue
+        path = Path(entry.path)
+        try:  # best effort: a temporary that cannot be removed (another process did, no permission) stays
+            if kind in ("tmp", "part") and entry.is_file():
+                path.unlink()
+            elif kind == "partial" and entry.is_dir():
+                shutil.rmtree(path)
+            elif kind == "replaced" and not out.exists() and not out.is_symlink():
+                os.replace(path, out)  # killed between the two renames of publish_dir: the old output back
+                continue
+            elif kind == "replaced":
+                shutil.rmtree(path) if entry.is_dir() else path.unlink()
+            else:
+                continue
+        except OSError:
+            continue
+        removed.append(path)
+    return removed
+    for entry in sorted(entries, key=lambda e: e.name):
+        match = pattern.fullmatch(entry.name)
+        if match is None or entry.is_symlink():
+            continue
+        kind = match["kind"] or "replaced"
+        pid, host = (match["pid"], match["host"]) if match["kind"] else (match["old_pid"], match["old_host"])
+        if not _writer_gone(int(pid), host):
+            continue
+        path = Path(entry.path)
+        with contextlib.suppress(FileNotFoundError):  # another process removed it first
+            if kind in ("tmp", "part") and entry.is_file():
+                path.unlink()
+            elif kind == "partial" and entry.is_dir():
+                shutil.rmtree(path)
+            elif kind == "replaced" and not out.exists() and not out.is_symlink():
+                os.replace(path, out)  # killed between the two renames of publish_dir: the old output back
+                continue
+            elif kind == "replaced":
+                shutil.rmtree(path) if entry.is_dir() else path.unlink()
+            else:
+                continue
+            removed.append(path)
+    return removed
 
 
 WRITE_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EPERM, errno.EFBIG})
@@ -93,12 +198,13 @@ def publish_dir(staging: str | Path, out: str | Path) -> None:
     """Move the finished directory `staging` to `out` (a sibling): one rename when `out` is absent,
     else the old `out` is renamed aside first and deleted after; never a mix of old and new."""
     staging, out = Path(staging), Path(out)
+    remove_stale_temporaries(out)
     if out.is_dir() and not any(out.iterdir()):
         out.rmdir()
     if not out.exists():
         os.replace(staging, out)
         return
-    trash = out.with_name(f".{out.name}.replaced-{os.getpid()}")
+    trash = out.with_name(f".{out.name}.replaced-{writer_tag()}")
     shutil.rmtree(trash, ignore_errors=True)
     os.replace(out, trash)
     os.replace(staging, out)
@@ -114,18 +220,14 @@ def atomic_dir(out: str | Path, refuse: Callable[[Path], str | None]) -> Iterato
     files this program did not write) raises InputError, so nothing of the user's is replaced.
     """
     out = Path(out)
+    remove_stale_temporaries(out)  # first: an old output a killed writer had moved aside is back
     if out.exists() and not out.is_dir():
         raise InputError(f"output '{out}': exists and is not a directory")
     if out.is_dir() and any(out.iterdir()):
         reason = refuse(out)
         if reason:
             raise InputError(f"output '{out}': {reason}; nothing replaced (choose another directory)")
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent))
-        os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes 0700 directories; use the usual mode
-    except OSError as exc:
-        raise InputError(f"output '{out}': cannot write there ({os_error_reason(exc)})") from None
+    staging = staging_dir(out)
     try:
         try:
             yield staging
@@ -138,6 +240,19 @@ def atomic_dir(out: str | Path, refuse: Callable[[Path], str | None]) -> Iterato
             raise InputError(f"output '{out}': cannot write there ({os_error_reason(exc)})") from None
     finally:
         shutil.rmtree(staging, ignore_errors=True)
+
+
+def staging_dir(out: str | Path) -> Path:
+    """A new, empty temporary sibling of directory `out` (``.NAME.PID-HOST.XXXXXXXX.partial``, the
+    usual mode) to write `out` into, its parents created; InputError naming `out` if it cannot be."""
+    out = Path(out)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.{writer_tag()}.", suffix=".partial", dir=out.parent))
+        os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes 0700 directories; use the usual mode
+    except OSError as exc:
+        raise InputError(f"output '{out}': cannot write there ({os_error_reason(exc)})") from None
+    return staging
 
 
 def json_safe(value: Any) -> Any:

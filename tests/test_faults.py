@@ -459,6 +459,124 @@ def test_save_model_on_a_full_disk_names_the_weights(full_disk):
     assert not list((full_disk / "m").iterdir())
 
 
+# -- temporaries a killed writer left beside its output ---------------------------------------------
+
+
+def dead_pid() -> int:
+    """The id of a process that has ended."""
+    child = subprocess.Popen([sys.executable, "-c", "pass"])
+    child.wait()
+    assert not alive(child.pid)
+    return child.pid
+
+
+def test_a_rerun_removes_only_stale_temporaries_of_its_own_output(tmp_path):
+    """Before writing OUT, its temporaries (.OUT.PID-HOST.*.tmp / .part / .partial, .OUT.replaced-PID-HOST)
+    whose writer is a process of this host that no longer exists are removed; nothing else: not
+    those of a running writer, of another host, of another output, of the old unnamed format, a
+    symbolic link, nor the user's files."""
+    from suctionbench.io import atomic_dir, atomic_path, remove_stale_temporaries, writer_tag
+    from suctionbench.runlog.writer import EpisodeLog
+
+    dead, host = dead_pid(), writer_tag().split("-")[1]
+    live = os.getppid()
+    stale = [f".l.npz.{dead}-{host}.ab12_x9z.tmp", f".rep.{dead}-{host}.q0w9e8r7.partial/index.html",
+             f".rep.replaced-{dead}-{host}/index.html", f".e.mcap.{dead}-{host}.0a1b2c3d.part"]
+    kept = [f".l.npz.{live}-{host}.ab12_x9z.tmp", f".l.npz.{dead}-000000.ab12_x9z.tmp",
+            f".m.npz.{dead}-{host}.ab12_x9z.tmp", ".l.npz.ab12_x9z.tmp", f".rep.{live}-{host}.q0w9e8r7.partial/a",
+            "notes.txt", "rep/index.html", f"l.npz.{dead}-{host}.ab12_x9z.tmp"]
+    for name in stale + kept:
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / name).write_text("x")
+    (tmp_path / f".l.npz.{dead}-{host}.zz_link.tmp").symlink_to(tmp_path / "notes.txt")
+    kept.append(f".l.npz.{dead}-{host}.zz_link.tmp")
+    with atomic_path(tmp_path / "l.npz") as tmp:
+        tmp.write_text("labels")
+    with atomic_dir(tmp_path / "rep", lambda out: None) as out:
+        (out / "index.html").write_text("new")
+    with EpisodeLog(tmp_path / "e.mcap", {"seed": 0}):
+        pass
+    assert (tmp_path / "l.npz").read_text() == "labels" and (tmp_path / "rep" / "index.html").read_text() == "new"
+    left = {str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*") if p.is_file() or p.is_symlink()}
+    assert left == {*kept, "l.npz", "e.mcap"}, left ^ {*kept, "l.npz", "e.mcap"}
+    assert remove_stale_temporaries(tmp_path / "l.npz") == []
+
+
+def test_an_old_output_moved_aside_by_a_killed_writer_is_put_back(tmp_path):
+    """Killed between publish_dir's two renames (OUT moved aside, the new one not yet in place): the
+    next write of OUT puts the old one back before judging OUT, instead of deleting it."""
+    from suctionbench.io import remove_stale_temporaries, writer_tag
+
+    dead, host = dead_pid(), writer_tag().split("-")[1]
+    aside = tmp_path / f".rep.replaced-{dead}-{host}"
+    aside.mkdir()
+    (aside / "index.html").write_text("old report")
+    assert remove_stale_temporaries(tmp_path / "rep") == []
+    assert (tmp_path / "rep" / "index.html").read_text() == "old report" and not aside.exists()
+
+
+KILL_AT = {  # command, and the moment its process kills itself (SIGKILL: no cleanup can run)
+    "report .partial": ("report", "suctionbench.evaluation.report._write_report", "after"),
+    "report .replaced": ("report", "os.replace", "replaced"),
+    "label --out .tmp": ("label", "os.replace", "npz"),
+}
+KILLER = textwrap.dedent("""
+    import importlib, os, signal, sys
+    target, when = sys.argv[1], sys.argv[2]
+    module, name = target.rsplit(".", 1)
+    owner = importlib.import_module(module)
+    real = getattr(owner, name)
+
+    def killed(*args, **kwargs):
+        if when == "npz" and str(args[1]).endswith(".npz"):
+            os.kill(os.getpid(), signal.SIGKILL)  # the labels are written, not yet renamed into place
+        result = real(*args, **kwargs)
+        if when == "after" or (when == "replaced" and ".replaced-" in str(args[1])):
+            os.kill(os.getpid(), signal.SIGKILL)
+        return result
+
+    setattr(owner, name, killed)
+    from suctionbench.cli import app
+    sys.argv = ["suctionbench", *sys.argv[3:]]
+    app()
+""")
+
+
+@pytest.mark.parametrize("case", [pytest.param(c, marks=[pytest.mark.slow] if c.startswith("report") else [])
+                                  for c in KILL_AT])
+def test_kill_9_leaves_temporaries_a_rerun_removes(case, tmp_path, box_mesh):
+    """kill -9 of report (while its report is written; between its two renames) and of label --out
+    (its labels written, not renamed): the hidden temporary stays beside the output; the same
+    command run again removes it and writes the output. Nothing else in the folder is touched."""
+    from fuzz_corpus import write_run
+
+    command, target, when = KILL_AT[case]
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    (out_dir / "notes.txt").write_text("mine")
+    if command == "report":
+        run = write_run(tmp_path / "run")
+        argv = ["report", str(run), "--out", str(out_dir / "rep")]
+        if when == "replaced":
+            assert runner.invoke(app, argv).exit_code == 0  # an old report for the killed one to replace
+    else:
+        argv = ["label", str(box_mesh), "--grasps", "20", "--samples", "2", "--mass", "0.1",
+                "--out", str(out_dir / "l.npz")]
+    killed = subprocess.run([sys.executable, "-c", KILLER, target, when, *argv], capture_output=True, text=True)
+    assert killed.returncode == -signal.SIGKILL, killed.stderr[-2000:]
+    hidden = sorted(p.name for p in out_dir.iterdir() if p.name.startswith("."))
+    assert len(hidden) == (2 if when == "replaced" else 1) and all(f"{killed_pid(hidden[0])}-" in h for h in hidden)
+    result = runner.invoke(app, [*argv, "--json"])
+    assert result.exit_code == 0, result.stderr[-2000:]
+    assert sorted(p.name for p in out_dir.iterdir()) == sorted(["notes.txt", "rep" if command == "report" else "l.npz"])
+
+
+def killed_pid(name: str) -> str:
+    """The writer's pid in a temporary's name ('.rep.replaced-123-abcdef', '.l.npz.123-abcdef.x.tmp')."""
+    tag = name.rsplit("replaced-", 1)[1] if "replaced-" in name else name.split(".")[-3]
+    return tag.split("-")[0]
+
+
 # -- every output on a full disk and on a read-only file system ------------------------------------
 
 

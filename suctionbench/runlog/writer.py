@@ -23,6 +23,7 @@ from scipy.spatial.transform import Rotation
 
 from suctionbench import __version__
 from suctionbench.geometry.frames import approach_frames
+from suctionbench.io import remove_stale_temporaries, writer_tag
 
 METADATA_NAME = "suctionbench"
 """Name of the MCAP metadata record holding the run metadata."""
@@ -222,7 +223,8 @@ def _as_array(name: str, value: Any, shape: tuple[int | None, ...]) -> np.ndarra
 class EpisodeLog:
     """An MCAP log of one pick episode, written atomically.
 
-    Messages go to a hidden temp file next to `path` (``.NAME.XXXXXXXX.part``); `close` finishes
+    Messages go to a hidden temp file next to `path` (``.NAME.PID-HOST.XXXXXXXX.part``, see
+    `suctionbench.io`: the next log of `path` removes one whose writer was killed); `close` finishes
     the MCAP summary, fsyncs and renames it onto `path`, so `path` is either absent or a complete,
     indexed file — never a half-written log that a later ``read_run`` would trip over. Used as a
     context manager, an exception inside the block discards the temp file instead (`abort`).
@@ -241,13 +243,14 @@ class EpisodeLog:
         self.path = Path(path)
         # Serialise before touching the disk, so bad metadata leaves nothing behind.
         record, types = metadata_record(metadata)
-        self._tmp_path = self.path.with_name(f".{self.path.name}.{uuid.uuid4().hex[:8]}.part")
+        self._tmp_path = self.path.with_name(f".{self.path.name}.{writer_tag()}.{uuid.uuid4().hex[:8]}.part")
         self._schema_ids: dict[str, int] = {}
         self._channel_ids: dict[str, int] = {}
         self._sequence: dict[str, int] = {}
         self._file: IO[bytes] | None = None
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
+            remove_stale_temporaries(self.path)
             self._file = open(self._tmp_path, "xb")  # noqa: SIM115 (closed in close/abort)
         except OSError as exc:
             raise self._named(exc) from None

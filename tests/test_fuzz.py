@@ -334,7 +334,7 @@ def test_a_nan_training_checkpoint_is_refused(tmp_path):
 def test_objects_never_replace_a_directory_holding_user_files(corpus, tmp_path):
     """objects build --out and objects import --overwrite replace object directories: one holding a
     file suctionbench did not write (or no object at all) is refused before any work, untouched."""
-    from suctionbench.cli.objects import foreign_object_entry
+    from suctionbench.objects.ownership import foreign_object_entry
     from suctionbench.objects.registry import assets_root, eval_specs
 
     root = corpus["user_objects"]
@@ -366,6 +366,60 @@ def test_objects_never_replace_a_directory_holding_user_files(corpus, tmp_path):
     record.pop("mass_model", None)
     (old / "object.toml").write_text(tomli_w.dumps({**record, "retired_field": 1}))
     assert foreign_object_entry(old) is None
+
+
+def _user_folder(path: Path) -> Path:
+    path.mkdir(parents=True)
+    (path / "notes.txt").write_text("my notes\n")
+    return path
+
+
+def test_build_object_never_replaces_a_folder_holding_user_files(tmp_path, monkeypatch):
+    """The objects layer itself refuses (not only the CLI): build_object, the function every object
+    build, import and corpus generation ends in, refuses a folder holding a file it did not write
+    before any work, and again if such a file appears while it works; the folder is untouched and
+    no temporary is left beside it. An empty folder, or one of its own objects, it replaces."""
+    import trimesh
+
+    from suctionbench.errors import InputError
+    from suctionbench.objects import build
+    from suctionbench.objects.spec import ObjectSpec
+
+    box = trimesh.creation.box(extents=(0.06, 0.04, 0.02))
+    spec = ObjectSpec(name="box", set="custom", generator="import", density=500.0)
+    target = _user_folder(tmp_path / "custom" / "box")
+    with pytest.raises(InputError, match=f"object directory '{target}': holds no object.toml of suctionbench"):
+        build.build_object(box, spec, target, decompose=False)
+    assert sorted(p.name for p in target.iterdir()) == ["notes.txt"]
+    assert sorted(p.name for p in target.parent.iterdir()) == ["box"]
+    (target / "notes.txt").unlink()  # empty: nothing to lose
+    build.build_object(box, spec, target, decompose=False)
+    assert sorted(p.name for p in target.iterdir()) == ["mesh.stl", "object.toml"]
+    real = build.stable_poses
+
+    def user_writes_meanwhile(*args):  # a file of the user's appears while the object is built
+        (target / "notes.txt").write_text("written while the build ran\n")
+        return real(*args)
+
+    monkeypatch.setattr(build, "stable_poses", user_writes_meanwhile)
+    with pytest.raises(InputError, match=f"'{target}': holds 'notes.txt', which suctionbench did not write"):
+        build.build_object(box, spec, target, decompose=False)
+    assert sorted(p.name for p in target.iterdir()) == ["mesh.stl", "notes.txt", "object.toml"]
+    assert sorted(p.name for p in target.parent.iterdir()) == ["box"]
+
+
+def test_objects_generate_never_replaces_a_corpus_folder_holding_user_files(tmp_path):
+    """objects generate rebuilds out/train/NAME where no cached object of its spec is there: a user's
+    folder of that name is refused before anything is built, and kept."""
+    from suctionbench.objects.corpus import corpus_specs
+
+    spec = corpus_specs(2, 0)[1]
+    folder = _user_folder(tmp_path / "corpus" / spec.set / spec.name)
+    result = runner.invoke(app, ["objects", "generate", "--count", "2", "--workers", "1", "--out",
+                                 str(tmp_path / "corpus"), "--json"])
+    assert_clean_exit_2(result, as_json=True, needle=f"object directory '{folder}': holds no object.toml")
+    written = sorted(str(p.relative_to(tmp_path / "corpus")) for p in tree(tmp_path / "corpus"))
+    assert written == [spec.set, f"{spec.set}/{spec.name}", f"{spec.set}/{spec.name}/notes.txt"], written
 
 
 def test_dataset_show_thumbnails_of_a_small_dataset(tmp_path):

@@ -23,47 +23,8 @@ from suctionbench.cli.common import (
     run_command,
 )
 from suctionbench.errors import InputError
+from suctionbench.objects.ownership import check_replaceable_objects
 from suctionbench.validate import BYTES_PER_CORPUS_OBJECT, BYTES_PER_OBJECT, output_dir, require_disk
-
-
-def foreign_object_entry(directory: Path) -> str | None:
-    """Why `directory`, which `objects build` or `objects import --overwrite` would replace, may hold
-    something suctionbench did not write; None if it is absent or an object as suctionbench writes
-    it: an object.toml with an object record's identity (name, generator, geometry hash; any version
-    of the record, so a rebuild after the record changed still replaces it), mesh.stl, and
-    parts/part_NNN.stl (replacing it loses nothing)."""
-    import re
-    import tomllib
-
-    if not directory.exists() and not directory.is_symlink():
-        return None
-    if directory.is_symlink() or not directory.is_dir():
-        return "is not a directory"
-    try:
-        record = tomllib.loads((directory / "object.toml").read_text())
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
-        record = None
-    if not isinstance(record, dict) or not {"name", "generator", "geometry_hash"} <= set(record):
-        return "holds no object.toml of suctionbench"
-    for entry in sorted(directory.iterdir()):
-        stray = entry
-        if entry.name == "parts" and entry.is_dir() and not entry.is_symlink():
-            stray = next((p for p in sorted(entry.iterdir())
-                          if p.is_symlink() or not p.is_file() or not re.fullmatch(r"part_\d{3,}\.stl", p.name)), None)
-        elif entry.name in ("object.toml", "mesh.stl") and entry.is_file() and not entry.is_symlink():
-            stray = None
-        if stray is not None:
-            return f"holds '{stray.relative_to(directory)}', which suctionbench did not write"
-    return None
-
-
-def check_replaceable_objects(directories: list[Path]) -> None:
-    """InputError naming the first of `directories` that may hold something suctionbench did not write."""
-    for directory in directories:
-        reason = foreign_object_entry(directory)
-        if reason is not None:
-            raise InputError(f"object directory '{directory}': {reason}; nothing replaced (move it away or "
-                             "choose another --out / --root)")
 
 
 @objects_app.command("list")

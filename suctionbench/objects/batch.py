@@ -6,6 +6,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from suctionbench.objects.build import ObjectRecord, build_object
+from suctionbench.objects.ownership import check_replaceable_objects
 from suctionbench.objects.spec import ObjectSpec
 from suctionbench.parallel import process_pool
 
@@ -28,8 +29,10 @@ def build_specs(
     progress: Callable[[int], None] | None = None,
 ) -> list[ObjectRecord]:
     """Build every spec into root/<set>/<name>/ and return the records in spec order (`reuse_parts`:
-    keep the convex parts of objects whose mesh is unchanged, see build_object)."""
+    keep the convex parts of objects whose mesh is unchanged, see build_object). A target directory
+    holding files suctionbench did not write is an InputError before any object is built."""
     jobs = [(spec, Path(root) / spec.set / spec.name, decompose, reuse_parts) for spec in specs]
+    check_replaceable_objects(job[1] for job in jobs)
     records: list[ObjectRecord] = []
     if workers <= 1:
         for job in jobs:

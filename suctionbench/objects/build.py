@@ -1,5 +1,6 @@
 """Turn a mesh into an object directory: validated mesh, mass properties, stable poses and a
-convex decomposition for simulation, described by object.toml. Written atomically.
+convex decomposition for simulation, described by object.toml. Written atomically, and never in
+place of a directory holding files suctionbench did not write (`suctionbench.objects.ownership`).
 
 Layout of an object directory:
     object.toml         everything below, human readable
@@ -26,6 +27,7 @@ from suctionbench.errors import InputError
 from suctionbench.geometry.mesh import mesh_scale, validate_mesh
 from suctionbench.objects.decompose import CoacdFailed, run_coacd
 from suctionbench.objects.mass import MassModel, MassProperties, mass_properties, over_cap_message, resolve_mass
+from suctionbench.objects.ownership import check_replaceable_objects
 from suctionbench.objects.spec import ObjectSpec
 
 MAX_FACES = 6000
@@ -226,10 +228,15 @@ def build_object(
 ) -> ObjectRecord:
     """Build an object directory at `out_dir` (replaced atomically) and return its record.
 
+    An existing `out_dir` is replaced only if it is an object suctionbench wrote (or empty): one
+    holding anything else is an InputError naming it, before any work and again just before the
+    replacement.
+
     `coacd`: (schedule, options) for the convex decomposition instead of COACD_SCHEDULE and CoACD's
     defaults (see `decompose_mesh`). `reuse_parts`: where `out_dir` already holds this very mesh (same
     geometry hash) with its convex parts, keep those parts instead of running CoACD again (a rebuild
     that changes only masses; CoACD is deterministic, so a full rebuild gives the same parts)."""
+    check_replaceable_objects([Path(out_dir)])  # before the work: minutes of CoACD for nothing otherwise
     mesh = prepare_mesh(mesh, source=source if source != "generated" else spec.name)
     model, props = object_mass(mesh, spec, mass)
     mesh.density = props.mass / mesh.volume
@@ -278,6 +285,7 @@ def build_object(
                 (tmp / "parts" / f"part_{i:03d}.stl").write_bytes(data)
             record.parts = [f"parts/part_{i:03d}.stl" for i in range(len(part_bytes))]
         (tmp / "object.toml").write_text(tomli_w.dumps(record.to_toml()))
+        check_replaceable_objects([out_dir])  # again: a user's file may have appeared meanwhile
         _replace_dir(tmp, out_dir)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)

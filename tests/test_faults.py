@@ -459,6 +459,52 @@ def test_save_model_on_a_full_disk_names_the_weights(full_disk):
     assert not list((full_disk / "m").iterdir())
 
 
+@pytest.fixture
+def disk_16k_free(tmp_path):
+    """A 256 KiB tmpfs with 16 KiB left: room for a folder, not for an object's mesh."""
+    with small_disk(tmp_path / "16k_free", free=16 * 1024) as mount:
+        yield mount
+
+
+def fine_box():
+    """A 6 x 4 x 2 cm box of 768 faces: a 38 KB STL."""
+    import trimesh
+
+    return trimesh.creation.box(extents=(0.06, 0.04, 0.02)).subdivide().subdivide().subdivide()
+
+
+def test_build_object_on_a_disk_that_fills_names_the_file_and_leaves_nothing(disk_16k_free):
+    """The disk fills while an object is written (its mesh does not fit in what is left): an
+    InputError naming the object's file that could not be written, not its folder or the root;
+    nothing left, neither the temporary folder nor the parent folders the build created."""
+    from suctionbench.errors import InputError
+    from suctionbench.objects.build import build_object
+    from suctionbench.objects.spec import ObjectSpec
+
+    spec = ObjectSpec(name="box", set="custom", generator="import", density=500.0)
+    target = disk_16k_free / "user" / "custom" / "box"
+    with pytest.raises(InputError) as info:
+        build_object(fine_box(), spec, target, decompose=False)
+    assert str(info.value).startswith(f"output '{target / 'mesh.stl'}': cannot write there (No space left"), info.value
+    assert sorted(p.name for p in disk_16k_free.iterdir()) == ["filler"]
+
+
+def test_objects_import_on_a_disk_that_fills_names_the_file(disk_16k_free, monkeypatch, tmp_path):
+    """objects import past its size estimate (switched off here: something else filled the disk):
+    exit 2, one line naming the file that could not be written, nothing left under --root."""
+    mesh = tmp_path / "box.stl"
+    fine_box().export(mesh)
+    monkeypatch.setattr("suctionbench.cli.objects.require_disk", lambda *a: None)
+    root = disk_16k_free / "user"
+    result = runner.invoke(app, ["objects", "import", str(mesh), "--root", str(root), "--json"])
+    assert result.exit_code == 2, result.stderr[-2000:]
+    assert len(result.stderr.strip().splitlines()) == 1 and "Traceback" not in result.stderr
+    error = json.loads(result.stdout.splitlines()[-1])["error"]
+    assert error.startswith(f"output '{root / 'custom' / 'box' / 'mesh.stl'}': cannot write there (No space left"), \
+        error
+    assert sorted(p.name for p in disk_16k_free.iterdir()) == ["filler"]
+
+
 # -- temporaries a killed writer left beside its output ---------------------------------------------
 
 

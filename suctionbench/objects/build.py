@@ -1,6 +1,7 @@
 """Turn a mesh into an object directory: validated mesh, mass properties, stable poses and a
-convex decomposition for simulation, described by object.toml. Written atomically, and never in
-place of a directory holding files suctionbench did not write (`suctionbench.objects.ownership`).
+convex decomposition for simulation, described by object.toml. Written atomically (all or
+nothing), and never in place of a directory holding files suctionbench did not write
+(`suctionbench.objects.ownership`).
 
 Layout of an object directory:
     object.toml         everything below, human readable
@@ -11,8 +12,8 @@ Layout of an object directory:
 from __future__ import annotations
 
 import hashlib
+import os
 import shutil
-import tempfile
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,6 +26,7 @@ import trimesh
 from suctionbench.config import CUP_DEFAULT
 from suctionbench.errors import InputError
 from suctionbench.geometry.mesh import mesh_scale, validate_mesh
+from suctionbench.io import WRITE_ERRNOS, os_error_reason, publish_dir, staging_dir
 from suctionbench.objects.decompose import CoacdFailed, run_coacd
 from suctionbench.objects.mass import MassModel, MassProperties, mass_properties, over_cap_message, resolve_mass
 from suctionbench.objects.ownership import check_replaceable_objects
@@ -230,13 +232,16 @@ def build_object(
 
     An existing `out_dir` is replaced only if it is an object suctionbench wrote (or empty): one
     holding anything else is an InputError naming it, before any work and again just before the
-    replacement.
+    replacement. A write that fails (a full disk, no permission) is an InputError naming the file
+    or folder that could not be written, and leaves nothing: no temporary folder, and none of the
+    parent folders it created.
 
     `coacd`: (schedule, options) for the convex decomposition instead of COACD_SCHEDULE and CoACD's
     defaults (see `decompose_mesh`). `reuse_parts`: where `out_dir` already holds this very mesh (same
     geometry hash) with its convex parts, keep those parts instead of running CoACD again (a rebuild
     that changes only masses; CoACD is deterministic, so a full rebuild gives the same parts)."""
-    check_replaceable_objects([Path(out_dir)])  # before the work: minutes of CoACD for nothing otherwise
+    out_dir = Path(out_dir)
+    check_replaceable_objects([out_dir])  # before the work: minutes of CoACD for nothing otherwise
     mesh = prepare_mesh(mesh, source=source if source != "generated" else spec.name)
     model, props = object_mass(mesh, spec, mass)
     mesh.density = props.mass / mesh.volume
@@ -271,24 +276,12 @@ def build_object(
         schedule, options = coacd or (COACD_SCHEDULE, None)
         parts, record.decomposition = decompose_mesh(mesh, source, schedule, options)
         part_bytes = [part.export(file_type="stl") for part in parts]
-    out_dir = Path(out_dir)
-    try:
-        out_dir.parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))
-    except OSError as exc:
-        raise InputError(f"output '{out_dir}': cannot write there ({exc.strerror})") from None
-    try:
-        mesh.export(tmp / "mesh.stl")
-        if decompose:
-            (tmp / "parts").mkdir()
-            for i, data in enumerate(part_bytes):
-                (tmp / "parts" / f"part_{i:03d}.stl").write_bytes(data)
-            record.parts = [f"parts/part_{i:03d}.stl" for i in range(len(part_bytes))]
-        (tmp / "object.toml").write_text(tomli_w.dumps(record.to_toml()))
-        check_replaceable_objects([out_dir])  # again: a user's file may have appeared meanwhile
-        _replace_dir(tmp, out_dir)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+    files = {"mesh.stl": mesh.export(file_type="stl")}
+    if decompose:
+        record.parts = [f"parts/part_{i:03d}.stl" for i in range(len(part_bytes))]
+        files.update(zip(record.parts, part_bytes, strict=True))
+    files["object.toml"] = tomli_w.dumps(record.to_toml()).encode()
+    write_object_dir(out_dir, files)
     record.directory = out_dir
     return record
 
@@ -327,13 +320,45 @@ def object_mass(mesh: trimesh.Trimesh, spec: ObjectSpec, mass: float | None = No
     return model, props
 
 
-def _replace_dir(new: Path, target: Path) -> None:
-    """Move directory `new` to `target`, replacing any old one (old removed only after the move)."""
-    old = None
-    if target.exists():
-        old = target.with_name(f".{target.name}.old")
-        shutil.rmtree(old, ignore_errors=True)
-        target.rename(old)
-    new.rename(target)
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
+def write_object_dir(out_dir: Path, files: dict[str, bytes]) -> None:
+    """Write `files` (path inside the object directory -> content) as the object directory
+    `out_dir`, all or nothing: into a temporary sibling first, which then takes the place of
+    `out_dir` (`suctionbench.io.publish_dir`) if that is still an object suctionbench wrote.
+
+    A file system that refuses a write (full, read-only, no permission) is an InputError naming
+    the file or folder of `out_dir` that could not be written; the temporary folder and the parent
+    folders this call created are removed, so nothing is left behind."""
+    out_dir = Path(out_dir)
+    created = [p for p in (out_dir.parent, *out_dir.parent.parents) if not p.exists()]  # deepest first
+    staging, writing = None, out_dir.parent
+    try:
+        out_dir.parent.mkdir(parents=True, exist_ok=True)
+        writing = out_dir
+        staging = staging_dir(out_dir)
+        for name, data in files.items():
+            writing = out_dir / name
+            (staging / name).parent.mkdir(parents=True, exist_ok=True)
+            (staging / name).write_bytes(data)
+        writing = out_dir
+        check_replaceable_objects([out_dir])  # again: a user's file may have appeared meanwhile
+        publish_dir(staging, out_dir)
+    except OSError as exc:
+        if exc.errno not in WRITE_ERRNOS:
+            raise
+        failed = Path(exc.filename) if exc.filename else writing  # a failed write() carries no file name
+        if staging is not None and failed.is_relative_to(staging):  # name the output, not the temporary folder
+            failed = out_dir / failed.relative_to(staging)
+        raise InputError(f"output '{failed}': cannot write there ({os_error_reason(exc)})") from None
+    except InputError as exc:
+        if staging is not None:  # name the output, not its temporary folder
+            raise InputError(str(exc).replace(str(staging), str(out_dir))) from None
+        raise
+    finally:
+        if staging is not None:
+            shutil.rmtree(staging, ignore_errors=True)
+        if not out_dir.is_dir():
+            for parent in created:  # deepest first; only empty ones (another writer may have filled one)
+                try:
+                    os.rmdir(parent)
+                except OSError:
+                    break

@@ -442,6 +442,29 @@ def test_eval_disk_full_mid_trial_log_is_resumable(nearly_full_disk, monkeypatch
     assert again.exit_code == 2 and "--resume" in json.loads(again.stdout.splitlines()[-1])["error"]
 
 
+def test_eval_resume_with_nothing_to_resume_says_so(tmp_path):
+    """eval --resume where no interrupted run is (a job rerun with the same command until it is
+    done): the run starts afresh, with one 'note:' line on stderr saying so and "resumed": false in
+    the JSON; where an interrupted run is, "resumed": true and the trial logs it kept."""
+    out = tmp_path / "run"
+    argv = ["eval", "--policy", "centroid", "--set", "basic", "--trials", "2", "--workers", "1", "--out", str(out),
+            "--resume", "--json"]
+    result = runner.invoke(app, argv)
+    assert result.exit_code == 0, result.stderr[-2000:]
+    assert result.stderr.strip().splitlines() == [
+        f"note: --resume: nothing to resume: no '{tmp_path / 'run.incomplete'}'; running all 2 trials"]
+    reply = json.loads(result.stdout.splitlines()[-1])
+    assert reply["resumed"] is False and reply["trials_reused"] == 0 and reply["trials"] == 2
+    out.rename(tmp_path / "run.incomplete")  # as if killed after its first trial
+    (tmp_path / "run.incomplete" / "trials" / "trial_00001.mcap").unlink()
+    result = runner.invoke(app, argv)
+    assert result.exit_code == 0 and result.stderr.strip() == "", result.stderr[-2000:]
+    reply = json.loads(result.stdout.splitlines()[-1])
+    assert reply["resumed"] is True and reply["trials_reused"] == 1 and reply["trials"] == 2
+    help_text = runner.invoke(app, ["eval", "--help"], env={"COLUMNS": "200"}).stdout
+    assert "With none there, the run starts afresh and says so" in " ".join(help_text.replace("│", " ").split())
+
+
 def test_save_model_on_a_full_disk_names_the_weights(full_disk):
     """safetensors' own writer fails on a full disk with an error of its own type and no path; the
     weights are serialised in memory and written by Python instead: InputError naming the file."""

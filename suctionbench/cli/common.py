@@ -138,6 +138,11 @@ def error_line(message: str, kind: str = "error") -> None:
     err.print(Text.assemble((f"{kind}:", "bold red"), " ", " ".join(str(message).split())), highlight=False)
 
 
+def note(message: str) -> None:
+    """One stderr line 'note: MESSAGE' (plain text): something the user should know that is no error."""
+    err.print(Text.assemble(("note:", "bold cyan"), " ", " ".join(str(message).split())), highlight=False)
+
+
 def run_command(as_json: bool, body: Callable[[], dict[str, Any]], *, output: str | None = None) -> None:
     """Run a command body under the CLI contract (exit codes, JSON on the last line).
 

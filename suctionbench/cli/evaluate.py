@@ -7,7 +7,16 @@ from typing import Annotated, Any
 
 import typer
 
-from suctionbench.cli.common import JsonOpt, app, console, print_rows, progress_bar, resolve_workers, run_command
+from suctionbench.cli.common import (
+    JsonOpt,
+    app,
+    console,
+    note,
+    print_rows,
+    progress_bar,
+    resolve_workers,
+    run_command,
+)
 from suctionbench.cli.plan import PolicyArgOpt
 from suctionbench.errors import InputError
 
@@ -37,7 +46,10 @@ def eval_cmd(
     policy_arg: PolicyArgOpt = None,
     seed: Annotated[int | None, typer.Option(help="Base seed of the trials (default: the task's).")] = None,
     resume: Annotated[bool, typer.Option(help="Finish an interrupted run (OUT.incomplete) of the same "
-                                              "configuration.")] = False,
+                                              "configuration, keeping its finished trials. With none there, "
+                                              "the run starts afresh and says so: a 'note:' line on stderr "
+                                              "and \"resumed\": false in the JSON (so the same command can "
+                                              "be rerun until the run is done).")] = False,
     overwrite: Annotated[bool, typer.Option(help="Replace a run already in --out (or an interrupted one).")] = False,
     as_json: JsonOpt = False,
 ) -> None:
@@ -68,7 +80,7 @@ def eval_cmd(
                 runs[m] = run_eval(the_task, policy, run_dir, model=model, trials=trials, seed=seed,
                                    workers=resolve_workers(workers), engine=engine, address=address,
                                    metric=m, cup=cup, camera=camera, policy_args=options, resume=resume,
-                                   overwrite=overwrite, progress=advance)
+                                   overwrite=overwrite, progress=advance, notify=note)
         if not as_json:
             known = bool(the_task.metrics)  # the paper's known-objects table: accuracy and Spearman too
             pct = _percent  # percentages and short headers: 80 columns hold the table

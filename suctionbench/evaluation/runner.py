@@ -80,7 +80,8 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
              seed: int | None = None, workers: int = 1, engine: str = "local", address: str | None = None,
              metric: str = "rwr", cup: str = "default", policy_args: dict[str, Any] | None = None,
              camera: str = "primesense", command: str | None = None, resume: bool = False, overwrite: bool = False,
-             progress: Callable[[int], None] | None = None) -> dict[str, Any]:
+             progress: Callable[[int], None] | None = None, notify: Callable[[str], None] | None = None
+             ) -> dict[str, Any]:
     """Run the trials into out/ (trials/*.mcap + run.json) and return the summary from the logs.
 
     `policy` is a built-in name or any spec `suctionbench.policies.plugins` loads (a plug-in,
@@ -93,7 +94,12 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
     is logged, so `out` is a complete run or absent. A killed run stays in ``OUT.incomplete``:
     `resume` finishes it (same configuration; finished trial logs are kept, unfinished ones
     redone), `overwrite` starts it over. An existing run in `out` is replaced only with
-    `overwrite`, and only if it is a run (run.json and trial logs, nothing else)."""
+    `overwrite`, and only if it is a run (run.json and trial logs, nothing else).
+
+    `resume` with no interrupted run there is not an error (a job restarted with the same command
+    until it finishes, say): the run starts afresh, `notify` (the CLI: a note on stderr) is told so
+    before the first trial, and the summary's "resumed" is false. "resumed" is true where an
+    interrupted run was finished, "trials_reused" counts its trial logs that were kept."""
     from suctionbench.policies.plugins import builtin_name, canonical_spec, load_policy, policy_label
     from suctionbench.sensing.camera import resolve_camera
 
@@ -137,6 +143,7 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
            "metric": metric, "cup": cup, "camera": intrinsics.name, "trials": len(planned),
            "seed": seed if seed is not None else task.seed, "compute_model": CYCLE_MODEL.compute_time(spec),
            "command": command, "versions": _versions()}
+    resumed = False
     if staging.exists():
         if overwrite:
             remove_run(staging)
@@ -145,6 +152,7 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
                              "--overwrite to start over)")
         else:
             _check_same_run(staging, run)
+            resumed = True
     log_dir = staging / "trials"
     try:
         log_dir.mkdir(parents=True, exist_ok=True)
@@ -155,6 +163,9 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
     with atomic_path(staging / "run.json") as tmp:
         tmp.write_text(json.dumps(json_safe(run), indent=1, allow_nan=False))
     todo = [t for t in planned if not (log_dir / trial_log_name(t.index)).is_file()]
+    if resume and not resumed and notify is not None:
+        why = "started over (--overwrite)" if overwrite else f"nothing to resume: no '{staging}'"
+        notify(f"--resume: {why}; running all {len(planned)} trials")
     if progress and len(todo) < len(planned):
         progress(len(planned) - len(todo))
     from suctionbench.parallel import map_ordered
@@ -167,7 +178,7 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
     if not status["complete"]:
         raise RuntimeError(f"run '{staging}' is incomplete after all its trials ran: {status}")
     publish_dir(staging, out)
-    return summarize_run(out)
+    return {**summarize_run(out), "resumed": resumed, "trials_reused": len(planned) - len(todo)}
 
 
 INCOMPLETE_SUFFIX = ".incomplete"

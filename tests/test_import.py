@@ -568,3 +568,13 @@ def test_a_flat_closed_pair_of_faces_is_not_a_body_to_unite():
     solid = _solid(trimesh.util.concatenate([*pieces, flat]))
     assert solid.mesh.volume == pytest.approx(0.04 * 0.03 * 0.02 + 0.02**3, rel=1e-5)
     assert any("1 open body dropped" in note for note in solid.notes), solid.notes
+
+
+def test_a_sliver_thinner_than_the_gap_it_is_snapped_across_does_not_stop_the_union():
+    """A 2 um-thick closed slab 5 um above a box (as a1's thigh mesh has): snapped across, both its faces
+    pass through each other and it turns inside out; it stays as it was instead and is dropped as a crumb."""
+    box = _box((0.04, 0.04, 0.04))
+    slab = _box((0.01, 0.01, 2e-6), (0.0, 0.0, 0.02 + 5e-6 + 1e-6))
+    solid = _solid(trimesh.util.concatenate([box, slab]))
+    assert solid.mesh.volume == pytest.approx(box.volume, rel=1e-6)
+    assert any("loose piece dropped" in note for note in solid.notes), solid.notes

@@ -479,7 +479,9 @@ def _unite(closed: list[trimesh.Trimesh], notes: list[str], tag: str) -> Solid:
                 if len(group) == 1:
                     joined.append(pieces[group[0]])
                     continue
-                united = _pieces(_union([snapped[k] for k in group], tag))
+                # a sliver thinner than the snap turns inside out: it stays as it was (and, apart, a crumb)
+                members = [snapped[k] if snapped[k].is_volume else pieces[k] for k in group]
+                united = _pieces(_union(members, tag))
                 joined.extend(united)
             pieces = sorted(joined, key=_volume, reverse=True)
     loose = []

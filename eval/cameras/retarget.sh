@@ -3,7 +3,7 @@
 # budget, epochs and seed), one on rendered PrimeSense images and one on RealSense D435 images,
 # each then planning on the basic set with both cameras (same seeded trials). Writes
 # retarget.md beside this script from the runs' JSON.
-# Usage: eval/cameras/retarget.sh [RUNS_DIR] [DATAPOINTS] [TRIALS]   (~30 min on 2 cores at 40000 / 25)
+# Usage: eval/cameras/retarget.sh [RUNS_DIR] [DATAPOINTS] [TRIALS]   (20 min on 2 cores at 40000 / 25)
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 RUNS=${1:-runs/retarget}

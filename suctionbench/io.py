@@ -126,29 +126,6 @@ def remove_stale_temporaries(out: str | Path) -> list[Path]:
             continue
         removed.append(path)
     return removed
-    for entry in sorted(entries, key=lambda e: e.name):
-        match = pattern.fullmatch(entry.name)
-        if match is None or entry.is_symlink():
-            continue
-        kind = match["kind"] or "replaced"
-        pid, host = (match["pid"], match["host"]) if match["kind"] else (match["old_pid"], match["old_host"])
-        if not _writer_gone(int(pid), host):
-            continue
-        path = Path(entry.path)
-        with contextlib.suppress(FileNotFoundError):  # another process removed it first
-            if kind in ("tmp", "part") and entry.is_file():
-                path.unlink()
-            elif kind == "partial" and entry.is_dir():
-                shutil.rmtree(path)
-            elif kind == "replaced" and not out.exists() and not out.is_symlink():
-                os.replace(path, out)  # killed between the two renames of publish_dir: the old output back
-                continue
-            elif kind == "replaced":
-                shutil.rmtree(path) if entry.is_dir() else path.unlink()
-            else:
-                continue
-            removed.append(path)
-    return removed
 
 
 WRITE_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EPERM, errno.EFBIG})

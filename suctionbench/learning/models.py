@@ -197,15 +197,7 @@ def count_macs(model: nn.Module) -> int:
         nonlocal total
         total += module.weight[0].numel() * output[0].numel()  # MACs per output value x output values
 
-    handles = [m.register_forward_hook(hook) for m in model.modules() if isinstance(m, nn.Conv2d | nn.Linear)]
-    try:
-        with torch.no_grad():
-            param = next(model.parameters())
-            model(torch.zeros(1, 1, IMAGE_SIZE, IMAGE_SIZE, device=param.device),
-                  torch.zeros(1, POSE_DIM, device=param.device))
-    finally:
-        for handle in handles:
-            handle.remove()
+    _dummy_forward(model, [m for m in model.modules() if isinstance(m, nn.Conv2d | nn.Linear)], hook)
     return total
 
 
@@ -219,7 +211,13 @@ def activation_bytes(model: nn.Module) -> int:
         if isinstance(output, torch.Tensor):
             total += output.numel() * output.element_size()
 
-    handles = [m.register_forward_hook(hook) for m in model.modules() if not list(m.children())]
+    _dummy_forward(model, [m for m in model.modules() if not list(m.children())], hook)
+    return total
+
+
+def _dummy_forward(model: nn.Module, modules: list[nn.Module], hook) -> None:
+    """One forward pass of a zero grasp (one image, one pose) with `hook` on `modules`, removed after."""
+    handles = [m.register_forward_hook(hook) for m in modules]
     try:
         with torch.no_grad():
             param = next(model.parameters())
@@ -228,4 +226,3 @@ def activation_bytes(model: nn.Module) -> int:
     finally:
         for handle in handles:
             handle.remove()
-    return total

@@ -508,14 +508,12 @@ def plan_files(
 ) -> dict[str, Any]:
     """`suctionbench plan`: read the files, plan (`plan_grasp`), draw the grasp to `out` if given,
     and return the JSON-ready result (`PlanResult.to_dict` plus the input and output paths)."""
-    if out is not None:  # before any work: a drawing that cannot be written costs no planning
-        from suctionbench.validate import output_file
+    from suctionbench.validate import output_file, require_disk
 
+    if out is not None:  # before any work: a drawing that cannot be written costs no planning
         output_file(out, "--out")
     image = read_depth(depth, depth_scale)
     if out is not None:
-        from suctionbench.validate import require_disk
-
         require_disk(out, 3 * image.size + 2**12, f"--out drawing of {image.shape[1]} x {image.shape[0]} px")
     result = plan_grasp(
         image, camera, mask=None if mask is None else read_mask(mask, image.shape),

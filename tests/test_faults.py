@@ -16,6 +16,7 @@ import textwrap
 import time
 import uuid
 from pathlib import Path
+from typing import Any
 
 import pytest
 from typer.testing import CliRunner
@@ -91,6 +92,17 @@ def run_coacd(mesh, **options):
 """
 
 
+def start_eval_until_first_trial(cmd: list[str], staging: Path, **popen: Any):
+    """Start the eval `cmd` and wait (up to 240 s) until its first trial log appears in
+    `staging`/trials: returns the process, that log directory and its pool workers' pids."""
+    parent = subprocess.Popen(cmd, **popen)
+    logs = staging / "trials"
+    deadline = time.monotonic() + 240
+    while time.monotonic() < deadline and not list(logs.glob("trial_*.mcap")):
+        time.sleep(0.2)
+    return parent, logs, child_pids(parent.pid)
+
+
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_coacd_child_dies_with_its_killed_parent(tmp_path):
     """kill -9 of a process in the middle of a convex decomposition: its CoACD child (the real child
@@ -133,12 +145,8 @@ def test_killed_eval_no_orphans_refused_report_then_resume_equals_a_full_run(tmp
     out = tmp_path / "run"
     cmd = [sys.executable, "-m", "suctionbench", "eval", "--policy", "centroid", "--set", "basic", "--trials", "6",
            "--workers", "2", "--seed", "3", "--out", str(out)]
-    parent = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    logs = tmp_path / "run.incomplete" / "trials"
-    deadline = time.monotonic() + 240
-    while time.monotonic() < deadline and not list(logs.glob("trial_*.mcap")):
-        time.sleep(0.2)
-    workers = child_pids(parent.pid)
+    parent, logs, workers = start_eval_until_first_trial(cmd, tmp_path / "run.incomplete",
+                                                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     parent.send_signal(signal.SIGKILL)
     parent.wait()
     assert list(logs.glob("trial_*.mcap")), "no trial finished in time"
@@ -730,12 +738,8 @@ def test_interrupted_eval_stops_at_once_and_resumes(tmp_path):
     out = tmp_path / "run"
     cmd = [sys.executable, "-m", "suctionbench", "eval", "--policy", "centroid", "--set", "basic", "--trials", "40",
            "--workers", "2", "--seed", "1", "--out", str(out), "--json"]
-    parent = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    logs = tmp_path / "run.incomplete" / "trials"
-    deadline = time.monotonic() + 240
-    while time.monotonic() < deadline and not list(logs.glob("trial_*.mcap")):
-        time.sleep(0.2)
-    workers = child_pids(parent.pid)
+    parent, logs, workers = start_eval_until_first_trial(cmd, tmp_path / "run.incomplete",
+                                                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     parent.send_signal(signal.SIGINT)
     try:
         stdout, stderr = parent.communicate(timeout=30)

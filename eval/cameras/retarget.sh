@@ -42,9 +42,8 @@ def last(path):
 print("| model trained on | held-out accuracy | held-out AP | camera at test | trials | success % | AP % |")
 print("|---|---|---|---|---|---|---|")
 for model in cameras:
-    card = last(runs / f"model_{model}.json")
-    metrics = card.get("metrics", card)
-    acc, ap = metrics.get("val_accuracy"), metrics.get("val_ap")
+    card = last(runs / f"model_{model}.json")  # `train --json`: the held-out metrics at its top level
+    acc, ap = card.get("val_accuracy"), card.get("val_ap")
     for cam in cameras:
         s = last(runs / f"m_{model}_c_{cam}.json")
         s = s.get("summary", s)

@@ -23,7 +23,6 @@ from suctionbench.cli.common import (
     run_command,
 )
 from suctionbench.errors import InputError
-from suctionbench.objects.ownership import check_replaceable_objects
 from suctionbench.validate import BYTES_PER_CORPUS_OBJECT, BYTES_PER_OBJECT, output_dir, require_disk
 
 
@@ -89,7 +88,6 @@ def objects_build(
             raise InputError(f"object set '{set_name}' is unknown (known: {', '.join(sets)})")
         specs = [s for name, group in sets.items() if set_name in (None, name) for s in group]
         root = output_dir(out or assets_root(), "--out")
-        check_replaceable_objects([root / spec.set / spec.name for spec in specs])
         require_disk(root, len(specs) * BYTES_PER_OBJECT, f"{len(specs)} objects")
         start = time.perf_counter()
         with progress_bar(len(specs), "building", not as_json) as advance:
@@ -161,19 +159,15 @@ def objects_import(
     holes closed; each defect it cannot repair named), decompose, compute stable poses."""
 
     def body() -> dict[str, Any]:
-        from suctionbench.objects.importer import NAME_PATTERN, import_mesh
-        from suctionbench.objects.registry import set_dir
+        from suctionbench.objects.importer import import_mesh, import_target
 
         object_name = name or Path(path).stem.lower()
         if root is not None:
             output_dir(root, "--root")
-        if NAME_PATTERN.match(set_name) and NAME_PATTERN.match(object_name):  # else import_mesh says what is wrong
-            target = (root / set_name if root else set_dir(set_name)) / object_name
-            if overwrite:
-                check_replaceable_objects([target])
-            size = Path(path).stat().st_size if Path(path).is_file() else 0
-            what = "--root" if root is not None else "object directory"
-            require_disk(output_dir(target, what), 3 * size + BYTES_PER_OBJECT, f"mesh '{path}' imported")
+        target = import_target(set_name, object_name, root=root, overwrite=overwrite)
+        size = Path(path).stat().st_size if Path(path).is_file() else 0
+        what = "--root" if root is not None else "object directory"
+        require_disk(output_dir(target, what), 3 * size + BYTES_PER_OBJECT, f"mesh '{path}' imported")
         record = import_mesh(
             path, set_name=set_name, name=object_name, units=units, scale=scale, mass=mass,
             try_repair=repair, overwrite=overwrite, root=root,

@@ -278,15 +278,19 @@ class SealModel:
         rise = np.diff(np.concatenate([fold, fold[:, :1]], axis=1), axis=1)
         length = np.sqrt(self.lip_chord**2 + rise**2).reshape(len(depth), self.cup.n_vertices, -1).sum(axis=2)
         stretch = np.abs(length / (self.lip_per_edge * self.lip_chord) - 1.0).max(axis=1)
-        # The preload's profile: the same closing with each place a point, not a cell. The cells
-        # keep a 2 mm groove from looking wider than it is (the leak), but on a slope they lift
-        # the lip by up to slope x spacing / 2 (0.06 mm at 45 deg on a 30 mm cylinder), which
-        # would shift the whole profile's mean; with points a slope whose curvature the lip
-        # follows (< 1 / R_min) closes to itself.
-        pointwise = self._closing(height, self.bend_rise)
-        heights = -pointwise + (pointwise @ self.lip_fit) @ self.lip_basis.T
-        return {"bridged": bridged, "resting": resting, "gap": gap, "leak": leak, "tilt": tilt,
-                "stretch": stretch, "heights": heights}
+        return {"bridged": bridged, "resting": resting, "gap": gap, "leak": leak, "tilt": tilt, "stretch": stretch}
+
+    def lip_heights(self, depth: np.ndarray) -> np.ndarray:
+        """(S, K) the profile the lip rests on relative to its bellows plane (zero mean and first
+        harmonic, positive away from the cup) for measured lip profiles `depth` (S, K): the wrench
+        test's lip preload (`SealResult.lip_heights`). The same closing as `lip_profile`'s with each
+        place a point, not a cell: the cells keep a 2 mm groove from looking wider than it is (the
+        leak), but on a slope they lift the lip by up to slope x spacing / 2 (0.06 mm at 45 deg on a
+        30 mm cylinder), which would shift the whole profile's mean; with points a slope whose
+        curvature the lip follows (< 1 / R_min) closes to itself."""
+        relative = depth - (depth @ self.lip_fit) @ self.lip_basis.T
+        lip = self._closing(-relative, self.bend_rise)
+        return -lip + (lip @ self.lip_fit) @ self.lip_basis.T
 
     def _closing(self, height: np.ndarray, rest_rise: np.ndarray) -> np.ndarray:
         """Morphological closing of `height` (S, K) (toward the cup) round the lip by the disc of
@@ -352,9 +356,7 @@ class SealModel:
         # Stage B: the perimeter (springs: chord paths; lip: the lip circle, gap, leak, vacuum).
         idx = np.flatnonzero(alive) if staged else np.arange(count)
         if self.lip:
-            perimeter, d_per, tilt, leak, vacuum, resting, heights = self._lip_stage(
-                points, frames, idx, d_vert, ring_off, hole
-            )
+            perimeter, d_per, tilt, leak, vacuum, resting = self._lip_stage(points, frames, idx, d_vert, ring_off, hole)
             # the cup body ends where the lip rests (it spans what it bridges), not in a groove
             rim = np.where(np.isfinite(resting), resting, d_vert)
             apex = np.minimum(rim.mean(axis=1) - cup.height, d_axis)  # the body stands on the lip
@@ -368,7 +370,6 @@ class SealModel:
             tilt = np.full(count, np.nan)
             leak = np.zeros(count)
             vacuum = full_vacuum
-            heights = None
             tilt_fail = leak_fail = np.zeros(count, dtype=bool)
             max_stretch = np.maximum(perimeter, np.maximum(flexion, cone))
             stretch_fail = ~(max_stretch <= cup.stretch_limit)
@@ -378,7 +379,7 @@ class SealModel:
             alive &= ~ring_off & ~hole & ~stretch_fail & ~tilt_fail & ~leak_fail
             if self.lip:  # now with the vacuum the seal holds
                 idx = np.flatnonzero(alive)
-                alive[idx] = gate(idx, ring_centre[idx], vacuum[idx], lip_heights=heights[idx])
+                alive[idx] = gate(idx, ring_centre[idx], vacuum[idx], lip_heights=self.lip_heights(d_per[idx]))
 
         # Stage C: probes inside the ring for holes and cone-face collisions.
         idx = np.flatnonzero(alive) if staged else np.arange(count)
@@ -409,6 +410,11 @@ class SealModel:
             failure[flag] = code
         surface = np.where(np.isfinite(d_axis)[:, None], points + d_axis[:, None] * approach, np.nan)
         planarity[~np.isfinite(planarity)] = np.inf
+        heights = None
+        if self.lip:  # where the lip was measured (all of it on the surface)
+            heights = np.full(d_per.shape, np.nan)
+            measured = np.isfinite(leak)
+            heights[measured] = self.lip_heights(d_per[measured])
         return SealResult(
             seal=failure == 0,
             failure=failure,
@@ -449,16 +455,14 @@ class SealModel:
     def _lip_stage(self, points, frames, idx, d_vert, ring_off, hole):
         """The lip circle: cast its non-vertex places, then `lip_profile` where all of it landed.
         Updates ring_off / hole in place; returns (lip stretch, depths, tilt, leak area, vacuum
-        force, resting depth of the lip at the n vertex bearings, the lip's profile heights relative
-        to its bellows plane), inf / NaN / inf / 0 / inf / NaN where the lip is not (all) on the
-        surface."""
+        force, resting depth of the lip at the n vertex bearings), inf / NaN / inf / 0 / inf where
+        the lip is not (all) on the surface."""
         count = len(points)
         stretch = np.full(count, np.inf)
         tilt = np.full(count, np.nan)
         leak = np.full(count, np.inf)
         d_lip = np.full((count, len(self.lip_xy)), np.inf)
         resting = np.full((count, self.cup.n_vertices), np.inf)
-        heights = np.full((count, len(self.lip_xy)), np.nan)
         if len(idx):
             d_new, back_new = self._depths(points[idx], frames[idx], self.lip_xy[~self.lip_vertex])
             d_lip[np.ix_(idx, np.flatnonzero(~self.lip_vertex))] = d_new
@@ -470,8 +474,7 @@ class SealModel:
                 lip = self.lip_profile(d_lip[on])
                 stretch[on], tilt[on], leak[on] = lip["stretch"], lip["tilt"], lip["leak"]
                 resting[on] = lip["resting"][:, self.lip_vertex]
-                heights[on] = lip["heights"]
         measured = np.isfinite(leak)
         vacuum = np.zeros(count)
         vacuum[measured] = vacuum_force(leak[measured], self.cup)
-        return stretch, d_lip, tilt, leak, vacuum, resting, heights
+        return stretch, d_lip, tilt, leak, vacuum, resting

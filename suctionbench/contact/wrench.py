@@ -192,16 +192,15 @@ def lip_angles(count: int) -> np.ndarray:
     return 2.0 * np.pi * np.arange(count) / count
 
 
-def lip_rows(lip_heights: np.ndarray, cup: CupConfig) -> tuple[np.ndarray, np.ndarray]:
-    """The lip-preload half-spaces of one grasp as A alpha <= b (module doc, "Lip preload"):
-    -(f_z) - (2 / r)(tau_x sin theta_k - tau_y cos theta_k) <= V - K z_k, one row per place, with V
-    left out of b (the caller adds the vacuum the seal holds)."""
-    theta = lip_angles(len(lip_heights))
-    rows = np.zeros((len(theta), 6))
+def lip_rows(count: int, cup: CupConfig) -> np.ndarray:
+    """(count, 6) the rows A of the lip-preload half-spaces A alpha <= V - K z_k (module doc, "Lip
+    preload"): -f_z - (2 / r)(tau_x sin theta_k - tau_y cos theta_k), one per place theta_k."""
+    theta = lip_angles(count)
+    rows = np.zeros((count, 6))
     rows[:, 2] = -1.0
     rows[:, 3] = -(2.0 / cup.radius) * np.sin(theta)
     rows[:, 4] = (2.0 / cup.radius) * np.cos(theta)
-    return rows, -cup.lip_rate * np.asarray(lip_heights, dtype=float)
+    return rows
 
 
 def resists(
@@ -235,11 +234,8 @@ def resists(
         ok &= np.hypot(a[:, 3], a[:, 4]) <= r * (f_n + eps * v)
     elif cup.kappa is None and lip_heights is not None:
         heights = np.asarray(lip_heights, dtype=float)
-        theta = lip_angles(heights.shape[1])
-        pressure = f_n[:, None] + (2.0 / r) * (
-            a[:, 3, None] * np.sin(theta)[None] - a[:, 4, None] * np.cos(theta)[None]
-        )
-        ok &= (pressure >= cup.lip_rate * heights - eps * np.atleast_1d(v)[:, None]).all(axis=1)
+        bound = np.atleast_1d(v)[:, None] * (1.0 + eps) - cup.lip_rate * heights
+        ok &= (a @ lip_rows(heights.shape[1], cup).T <= bound).all(axis=1)
     elif cup.kappa is None:
         ok &= np.hypot(a[:, 3], a[:, 4]) <= 0.5 * r * (f_n + eps * v)
     else:
@@ -328,8 +324,9 @@ def resists_qp(
     a_lin, b_lin = constraint_matrix(mu, cup, v)
     ring = cup.kappa is None and lip_heights is None
     if cup.kappa is None and lip_heights is not None:
-        a_lip, b_lip = lip_rows(lip_heights, cup)
-        a_lin, b_lin = np.vstack([a_lin, a_lip]), np.concatenate([b_lin, b_lip + v])
+        heights = np.asarray(lip_heights, dtype=float)
+        a_lin = np.vstack([a_lin, lip_rows(len(heights), cup)])
+        b_lin = np.concatenate([b_lin, v - cup.lip_rate * heights])
     a_all, b_all = a_lin, b_lin
     cones = [clarabel.NonnegativeConeT(len(b_lin))]
     if ring:

@@ -10,12 +10,29 @@ from suctionbench.errors import InputError
 from suctionbench.geometry.mesh import load_mesh
 from suctionbench.objects.build import ObjectRecord, build_object
 from suctionbench.objects.decompose import IMPORT_OPTIONS, IMPORT_SCHEDULE
+from suctionbench.objects.ownership import check_replaceable_objects
 from suctionbench.objects.registry import set_dir
 from suctionbench.objects.repair import solidify
 from suctionbench.objects.spec import SETS, ObjectSpec
 
 NAME_PATTERN = re.compile(r"^[a-z0-9][a-z0-9_\-]{0,63}$")
 """Object and set names: lower case letters, digits, '_' and '-'."""
+
+
+def import_target(set_name: str, name: str, *, root: Path | None = None, overwrite: bool = False) -> Path:
+    """The object directory an import of `name` into `set_name` writes (under `root`, default the
+    user object root), after checking the names and that the import may write there: an existing
+    object only with `overwrite`, and only one suctionbench wrote (InputError otherwise)."""
+    for what, value in (("--set", set_name), ("--name", name)):
+        if not NAME_PATTERN.match(value):
+            raise InputError(f"{what} '{value}': use lower-case letters, digits, '_' and '-' (max 64)")
+    if set_name in SETS:
+        raise InputError(f"--set '{set_name}': evaluation sets are generated, not imported; use e.g. 'custom'")
+    out_dir = (root / set_name if root else set_dir(set_name)) / name
+    if out_dir.exists() and not overwrite:
+        raise InputError(f"object '{set_name}/{name}' already exists at {out_dir} (pass --overwrite)")
+    check_replaceable_objects([out_dir])  # before loading and repairing the mesh
+    return out_dir
 
 
 def import_mesh(
@@ -39,14 +56,7 @@ def import_mesh(
     ``params["repairs"]``. With ``try_repair=False`` a mesh that needs any repair beyond merging
     seams is rejected instead.
     """
-    for what, value in (("--set", set_name), ("--name", name)):
-        if not NAME_PATTERN.match(value):
-            raise InputError(f"{what} '{value}': use lower-case letters, digits, '_' and '-' (max 64)")
-    if set_name in SETS:
-        raise InputError(f"--set '{set_name}': evaluation sets are generated, not imported; use e.g. 'custom'")
-    out_dir = (root / set_name if root else set_dir(set_name)) / name
-    if out_dir.exists() and not overwrite:
-        raise InputError(f"object '{set_name}/{name}' already exists at {out_dir} (pass --overwrite)")
+    out_dir = import_target(set_name, name, root=root, overwrite=overwrite)
     info = load_mesh(path, units=units, scale=scale)
     solid = solidify(info.mesh, source=str(path))
     if solid.notes and not try_repair:

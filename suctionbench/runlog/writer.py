@@ -8,6 +8,7 @@ the topics an episode actually produced.
 from __future__ import annotations
 
 import base64
+import contextlib
 import dataclasses
 import json
 import math
@@ -315,12 +316,9 @@ class EpisodeLog:
         if self._file is None:
             return
         file, self._file = self._file, None
-        try:
+        with contextlib.suppress(OSError):
             file.close()
-        except OSError:
-            pass
-        finally:
-            self._tmp_path.unlink(missing_ok=True)
+        self._tmp_path.unlink(missing_ok=True)
 
     # -- low level ---------------------------------------------------------------------------
 

@@ -366,7 +366,7 @@ def test_bellows_swing_is_the_pendulum_equilibrium():
         com = np.array([[0.0, 0.0, h]])
         swung = bellows_swing(force, com, centre, frame, CUP)
         assert np.linalg.norm(swung) == pytest.approx(np.linalg.norm(force), rel=1e-12)
-        tilt = brentq(lambda t: m * h * (a * math.cos(t) - G * math.sin(t)) - k_b * t, 0.0, stop)
+        tilt = brentq(lambda t, m=m, h=h, a=a: m * h * (a * math.cos(t) - G * math.sin(t)) - k_b * t, 0.0, stop)
         moment = external_wrench_at_contact(swung, com, centre, frame)[0, 3:]
         assert np.linalg.norm(moment) == pytest.approx(k_b * tilt, rel=1e-6)
         assert np.linalg.norm(moment) < m * a * h

@@ -91,8 +91,8 @@ def test_same_seed_same_labels_and_batch_independence(soap):
 
 def test_robust_label_is_the_composition_of_its_parts(soap):
     # rwr = mean_j [seal_j and resist_j]: recompute each sample's seal with the full (unstaged)
-    # seal model and its wrench test (on the load the bellows' swing leaves) (with the vacuum that seal holds) separately, then compose,
-    # and compare with the fast path.
+    # seal model and its wrench test (on the load the bellows' swing leaves, with the vacuum that
+    # seal holds) separately, then compose, and compare with the fast path.
     labeller = SuctionLabeller(soap, mass=0.15)
     points, approaches = sample_surface_grasps(soap, 40, np.random.default_rng(1))
     rwr, outcomes = labeller.robust(points, approaches, seed=5)

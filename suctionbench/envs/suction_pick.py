@@ -35,6 +35,11 @@ ACTION_HIGH = np.array([1.0, 1.0, 2.0, 1.0, 1.0, 1.0], dtype=np.float32)
 MIN_APPROACH_NORM = 1e-9
 """An approach vector shorter than this has no direction: the action is invalid."""
 
+
+class _Diverged(Exception):
+    """The simulation went unstable while the object re-settled."""
+
+
 RESET_TRIES = 5
 """Placements tried per reset before giving up; a drop whose simulation goes unstable (rare) is
 redrawn with the next seed from np_random, so every reset still depends on its seed alone."""
@@ -350,12 +355,13 @@ class SuctionPickEnv(gymnasium.Env):
         data.qpos[qpos], data.qvel[qvel] = object_qpos, object_qvel
         episode.cup.commanded, episode.cup.sealed = False, -1
         mujoco.mj_forward(model, data)
-        # the same settling rule as the drop in PickEpisode.reset: at most settle_time, done once still
-        for k in range(int(episode.config.settle_time / model.opt.timestep)):
+        def step() -> None:
             mujoco.mj_step(model, data)
-            speed = np.linalg.norm(data.qvel[qvel])
-            if not (np.all(np.isfinite(data.qpos)) and speed < episode.config.max_speed):
-                return False
-            if k > 100 and speed < 1e-3:
-                break
+            if not (np.all(np.isfinite(data.qpos)) and np.linalg.norm(data.qvel[qvel]) < episode.config.max_speed):
+                raise _Diverged
+
+        try:  # the placement's settling rule (PickEpisode.settle); still creeping at its end is fine here
+            episode.settle(step)
+        except _Diverged:
+            return False
         return True

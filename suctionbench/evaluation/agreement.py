@@ -24,8 +24,9 @@ import numpy as np
 from suctionbench.config import STANDARD_GRAVITY
 from suctionbench.errors import InputError
 
-NOT_EXECUTED = ("unreachable", "collision", "unstable")
-"""Simulated outcomes that mean the robot never tested the grasp: left out of the study."""
+NOT_EXECUTED = ("unreachable", "collision", "unstable", "no_grasp")
+"""Outcomes that mean the robot never tested a grasp (none reachable, none facing the gripper, an
+unstable placement): left out of the study."""
 
 SETS = ("basic", "typical", "adversarial")
 """The object sets the study covers by default."""

@@ -349,7 +349,8 @@ ADVERSARIAL_SPECS: list[ObjectSpec] = [
     ),
     _adversarial(
         "trefoil_tube", "torus_knot",
-        "trefoil-knot tube 11.3 mm in radius: too tightly curved across for the lip (a 15 mm cup needs R >= ~13 mm), so it seals only where the knot bends it into a saddle",
+        "trefoil-knot tube 11.3 mm in radius: too tightly curved across for the lip (a 15 mm cup needs"
+        " R >= ~13 mm), so it seals only where the knot bends it into a saddle",
         p=2, q=3, major_radius=0.035, minor_radius=0.015, tube_radius=0.0113, samples=180,
     ),
 ]

@@ -10,8 +10,8 @@ import trimesh
 
 from suctionbench.config import CupConfig, LabelConfig
 from suctionbench.contact import SuctionLabeller
-from suctionbench.errors import InputError
 from suctionbench.geometry.sampling import sample_surface_grasps
+from suctionbench.policies.base import NoGraspError
 
 MAX_APPROACH_FROM_VERTICAL = np.radians(60.0)
 """Candidates whose approach is more than this from straight down are skipped: the arm reaches
@@ -38,7 +38,7 @@ def surface_candidates(
     points, approaches = sample_surface_grasps(mesh_world, 4 * count, rng)
     downward = approaches[:, 2] <= -np.cos(MAX_APPROACH_FROM_VERTICAL)
     if not downward.any():
-        raise InputError("no surface of the object faces the gripper")
+        raise NoGraspError("no surface of the object faces the gripper")
     return points[downward][:count], approaches[downward][:count]
 
 

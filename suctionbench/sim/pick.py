@@ -164,29 +164,30 @@ class PickRunner:
         mesh, com = self.posed_object(pose)
         chosen, self.observation = None, None
         self._sensing_time = 0.0
+        if self.episode.placement_error:  # nothing to plan on: the trial is not executed
+            result = EpisodeResult.not_executed("unstable", self.episode.placement_error, valid=False)
+            return self._record(None, None, NO_LABELS, placement_time, 0.0, result, log)
         plan_start = time.perf_counter()
-        if req.grasp is not None:
-            point = pose[:3, :3] @ req.grasp[:3] + pose[:3, 3]
-            approach = pose[:3, :3] @ (req.grasp[3:] / np.linalg.norm(req.grasp[3:]))
-            q = None
-        elif req.policy in KNOWN_STATE_POLICIES:
-            from suctionbench.policies.analytic import analytic_grasp, random_surface_grasp
+        try:
+            if req.grasp is not None:
+                point = pose[:3, :3] @ req.grasp[:3] + pose[:3, 3]
+                approach = pose[:3, :3] @ (req.grasp[3:] / np.linalg.norm(req.grasp[3:]))
+            elif req.policy in KNOWN_STATE_POLICIES:
+                from suctionbench.policies.analytic import analytic_grasp, random_surface_grasp
 
-            if req.policy == "analytic":
-                chosen = analytic_grasp(mesh, com, self.record.mass, req.cup, req.seed, metric=req.metric)
+                if req.policy == "analytic":
+                    chosen = analytic_grasp(mesh, com, self.record.mass, req.cup, req.seed, metric=req.metric)
+                else:
+                    chosen = random_surface_grasp(mesh, req.seed)
             else:
-                chosen = random_surface_grasp(mesh, req.seed)
-            point, approach = chosen.point, chosen.approach
-            q = None if np.isnan(chosen.score) else chosen.score
-        else:
-            try:
                 chosen = self._plan_from_image()
-            except NoGraspError as exc:  # the policy's failure: recorded, nothing executed
-                result = EpisodeResult.not_executed("no_grasp", str(exc))
-                plan_time = time.perf_counter() - plan_start - self._sensing_time
-                return self._record(None, None, NO_LABELS, placement_time, plan_time, result, log)
+        except NoGraspError as exc:  # the policy's failure: recorded, nothing executed
+            result = EpisodeResult.not_executed("no_grasp", str(exc))
+            plan_time = time.perf_counter() - plan_start - self._sensing_time
+            return self._record(None, None, NO_LABELS, placement_time, plan_time, result, log)
+        if chosen is not None:
             point, approach = chosen.point, chosen.approach
-            q = None if np.isnan(chosen.score) else chosen.score
+        q = None if chosen is None or np.isnan(chosen.score) else chosen.score
         plan_time = time.perf_counter() - plan_start - self._sensing_time
         labels = self.label_grasp(point, approach, mesh, com)
         if render is not None:

@@ -172,15 +172,17 @@ def test_smallest_sealable_lying_cylinder_is_near_the_lip_travel_limit():
     # A cylinder of radius R lying on its side, grasped on top: the lip circle lands on it with
     # depth z(theta) = R - sqrt(R^2 - r^2 sin^2 theta), a pure second harmonic that no tilt of the
     # bellows removes, spanning the sag delta = R - sqrt(R^2 - r^2) (~r^2 / 2R). The lip folds
-    # lip_travel, its edge closes seal_gap more: no gap at all while delta <= 2.3 mm, i.e.
-    # R >= (r^2 + 2.3^2) / (2 x 2.3) mm = 13.4 mm; below that the gap near theta = +-90 deg grows
-    # and the leak passes ~1 mm^2 near R = 12.5 mm (at R = 12 mm: 0.33 mm excess over +-20 deg of
-    # lip on each side, ~2.3 mm^2). The geometric limit r^2 / (2 lip_travel) = 14.1 mm (exact
-    # sag: 15.1 mm): the labeller's smallest sealable radius must lie within 2.5 mm of it.
-    r, t, s = CUP.radius, CUP.lip_travel, CUP.seal_gap
+    # lip_travel; where the surface falls away further the lip hangs unfolded, pressed on by
+    # nothing, and its edge closes none of the gap (no seal_gap allowance): no gap at all while
+    # delta <= 2 mm, i.e. R >= (r^2 + 2^2) / (2 x 2) mm = 15.1 mm; below that the gap near
+    # theta = +-90 deg grows and the leak passes ~1 mm^2 near R = 14 mm (at R = 12 mm: ~0.6 mm of
+    # gap over +-25 deg of lip on each side, several mm^2). The geometric limit
+    # r^2 / (2 lip_travel) = 14.1 mm (exact sag: 15.1 mm): the labeller's smallest sealable radius
+    # must lie within 2.5 mm of it.
+    r, t = CUP.radius, CUP.lip_travel
     assert CUP.min_seal_radius == pytest.approx(0.0141, abs=1e-4)
-    no_gap = (r**2 + (t + s) ** 2) / (2 * (t + s))
-    assert no_gap == pytest.approx(0.0134, abs=1e-4)
+    no_gap = (r**2 + t**2) / (2 * t)
+    assert no_gap == pytest.approx(0.0151, abs=1e-4)
     radii = np.round(np.arange(0.0100, 0.0200, 0.0005), 4)
     sealed = {}
     for radius in radii:

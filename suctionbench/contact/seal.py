@@ -57,8 +57,10 @@ where the longest cone spring reaches the limit (13.9 deg for the 15 mm cup).
    where the bridged profile comes nearest the cup (relative to the bellows plane P); from there
    the lip reaches lip_travel further. Where the bridged profile lies deeper, a gap remains.
 4. *Leak and vacuum.* The gap under each lip place is (depth - bridged profile) + what lies
-   beyond the fold; the lip's thin edge closes seal_gap by itself, so the leak area is
-   A = sum_k max(0, gap_k - seal_gap) x (2 pi r / K). The ejector holds the vacuum
+   beyond the fold; where the lip is pressed on (folded) its thin edge closes seal_gap by itself,
+   where it has unfolded to its full reach it carries no pressure and closes nothing (the
+   ring-pressure condition p >= 0), so the leak area is A = sum_k max(0, gap_k - s_k) x (2 pi r / K)
+   with s_k = seal_gap, or 0 beyond the fold. The ejector holds the vacuum
    p(A) = suctionbench.vacuum.equilibrium_vacuum (its flow curve against the orifice flow of the
    leak); the seal is made while p >= vacuum_switch_fraction p_max, i.e. A <= leak_threshold_area
    (~1.0 mm^2), else `leak`. The vacuum force V(A) (= p(A) x effective area) is the V of the
@@ -272,7 +274,9 @@ class SealModel:
         beyond = np.maximum(e - floor - self.cup.lip_travel, 0.0)
         gap = (depth - bridged) + beyond
         resting = bridged - beyond  # where the lip itself ends up
-        leak = np.maximum(gap - self.cup.seal_gap, 0.0).sum(axis=1) * self.lip_arc
+        # the edge closes seal_gap only where the lip is pressed on; unfolded to its reach, it is not
+        allowance = np.where(beyond > 0.0, 0.0, self.cup.seal_gap)
+        leak = np.maximum(gap - allowance, 0.0).sum(axis=1) * self.lip_arc
         tilt = np.arctan(np.hypot(coef[:, 1], coef[:, 2]) / self.cup.radius)
         fold = np.minimum(e, floor + self.cup.lip_travel)  # the lip itself, relative to its plane
         rise = np.diff(np.concatenate([fold, fold[:, :1]], axis=1), axis=1)

@@ -11,9 +11,11 @@ object: it measures the gap between the lip's edge and that object's surface at 
 places round the lip circle (`mujoco.mj_multiRay`, one call, against the object's collision
 geometry, where the lip rests),
 from the distance at which a pressed lip rests (the contact margin), and integrates the leak area
-A = sum max(gap - seal_gap, 0) x arc. The ejector holds the vacuum p(A) where its flow curve meets
-the leak's orifice flow (`suctionbench.vacuum.equilibrium_vacuum`); the cup's pressure follows p(A)
-with a first-order time constant (the cup and hose volume evacuated by the ejector's flow), as
+A = sum max(gap - seal_gap, 0) x arc, the seal_gap allowance only where the lip is pressed on
+(folded: an unfolded, lifted lip carries no pressure and closes nothing). The ejector holds the
+vacuum p(A) where its flow curve meets the leak's orifice flow
+(`suctionbench.vacuum.equilibrium_vacuum`); the cup's pressure follows p(A) with a first-order time
+constant (the cup and hose volume evacuated by the ejector's flow), as
 MuJoCo actuator state. The pressure pulls the object toward the cup with V x p / p_max
 (V = p_max x effective area) and the tool toward the object, so the bellows contracts and the lip
 is squeezed between its end and the object: a MuJoCo `adhesion` actuator (gain V, ctrl = p / p_max)
@@ -23,7 +25,7 @@ the lip is resisted only until one side's contact force reaches zero and the lip
 ring-pressure peel limit r (V - m g) / 2 emerges from the contact forces; it is not coded). The
 seal breaks when the cup's vacuum falls below the ejector's part-present switch
 (`CupConfig.vacuum_switch_fraction`, i.e. a leak beyond `CupConfig.leak_threshold_area`): no
-hysteresis, no gap allowance beyond `seal_gap`.
+hysteresis, no gap allowance beyond `seal_gap` (and none at all where the lip has lifted).
 
 The physical cup (radius, effective area, vacuum, ejector, stiffnesses, stroke, lip travel, seal gap,
 friction) is `CupConfig`, shared with the analytic labeller; `SimCupConfig` holds only what the
@@ -497,8 +499,15 @@ class SuctionController:
         return np.clip(gaps, 0.0, cup.radius)
 
     def _leak_area(self, data: mujoco.MjData, body: int) -> float:
+        """Leak area (m^2) under the lip: the gap beyond what the lip's edge closes by itself, which
+        it does only where the lip is pressed on (folded, q < 0): a lip that has unfolded to its
+        free shape and lifted carries no pressure, and an unpressed edge seals nothing (the
+        ring-pressure condition p >= 0; Hudoklin et al.'s validated continuous cup model seals only
+        while the lip pressure stays compressive). Without this, a lifting side kept its seal for
+        another seal_gap and the simulated cup held 1.17x the ring limit's moment (now 1.01x)."""
         gaps = self.lip_gaps(data, body)
-        return float(np.sum(np.maximum(gaps - self.cup.seal_gap, 0.0)) * self._arc)
+        pressed = self._fold_weights @ data.qpos[self.lip_qpos] < 0.0
+        return float(np.sum(np.maximum(gaps - np.where(pressed, self.cup.seal_gap, 0.0), 0.0)) * self._arc)
 
     # -- the rigid reference ------------------------------------------------------------------------
     def sealed_body(self, data: mujoco.MjData, gap: float | None = None) -> int:

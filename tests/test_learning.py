@@ -148,6 +148,31 @@ def test_compact_shapes_and_parameter_count():
     assert count_macs(model) < count_macs(build_model("dn3")) / 100
 
 
+def test_context_net_reads_the_context_channel_with_its_own_stream():
+    # compact's image stream twice (2 x 30,720) + pc1 48 + fc4 (2 * 64 + 16) * 64 + 64 = 9,280 +
+    # fc5 130 = 70,898. The grasp stream reads channel 0 only and the context stream channel 1 only:
+    # changing one channel changes the logits, and a net whose context stream is zeroed ignores it.
+    model = build_model("context", torch.Generator().manual_seed(0))
+    assert model.image_channels == 2
+    assert count_parameters(model) == 2 * 30_720 + 48 + 9_280 + 130 == 70_898
+    # MACs: compact's image stream (its total less pc1 2*16, fc4 80*64 and fc5 64*2) twice, pc1,
+    # fc4 (2 * 64 + 16) * 64 and fc5.
+    stream = count_macs(build_model("compact")) - 32 - 80 * 64 - 128
+    assert count_macs(model) == 2 * stream + 32 + 144 * 64 + 128
+    images, poses = torch.randn(4, 2, 32, 32, generator=torch.Generator().manual_seed(1)), torch.zeros(4, 2)
+    base = model(images, poses)
+    for channel in (0, 1):
+        changed = images.clone()
+        changed[:, channel] += 1.0
+        assert not torch.allclose(model(changed, poses), base), channel
+    with torch.no_grad():
+        for p in model.context_stream.parameters():
+            p.zero_()
+    changed = images.clone()
+    changed[:, 1] = torch.randn(4, 32, 32)
+    assert torch.equal(model(changed, poses), model(images, poses))
+
+
 def test_initialisation_is_seeded_truncated_he():
     a = build_model("dn3", torch.Generator().manual_seed(3))
     b = build_model("dn3", torch.Generator().manual_seed(3))

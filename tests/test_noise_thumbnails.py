@@ -23,7 +23,9 @@ from suctionbench.sensing.noise import (
     sample_gp_field,
 )
 from suctionbench.sensing.thumbnails import (
+    THUMBNAIL_CONTEXT,
     THUMBNAIL_GQCNN,
+    extract_context_thumbnails,
     extract_thumbnails,
     extract_thumbnails_reference,
     pose_vector,
@@ -253,6 +255,32 @@ def test_vectorised_extraction_matches_per_grasp_reference():
     thumbs = extract_thumbnails(image, pixels, angles)
     np.testing.assert_allclose(thumbs, extract_thumbnails_reference(image, pixels, angles), atol=1e-6)
     assert np.all(thumbs[3] == 0.0)
+
+
+def test_context_thumbnail_sees_three_times_as_far_and_averages_its_blocks():
+    # A box 60 px long lying with its near end 60 px beyond the grasp pixel along the approach's
+    # image direction: outside the 96 px grasp crop (which reaches 46.5 px down its middle
+    # column), inside the 288 px context crop (139.5 px). The context pixel is the mean of its 9 x 9 block: on a 1-pixel
+    # checkerboard of +-1 mm, a block of 81 pixels averages to +-1/81 mm, against +-1 mm for
+    # point samples.
+    assert THUMBNAIL_CONTEXT.crop_size == 3 * THUMBNAIL_GQCNN.crop_size
+    assert THUMBNAIL_CONTEXT.out_size == THUMBNAIL_GQCNN.out_size
+    image = _plane()
+    u0, v0 = 320.0, 200.0
+    image[int(v0) + 60 : int(v0) + 120, 300:341] = PLANE - 0.05  # the box, straight down the image
+    pixels, angles = np.array([[u0, v0]]), np.array([math.pi / 2])  # approach points down the image
+    local = extract_thumbnails(image, pixels, angles)[0]
+    context = extract_context_thumbnails(image, pixels, angles)[0]
+    assert local.min() == pytest.approx(PLANE)  # the grasp crop does not see the box
+    assert context.min() == pytest.approx(PLANE - 0.05, abs=1e-6)  # the context crop does
+    rows = np.flatnonzero(context.min(axis=1) < PLANE - 0.025)
+    step = THUMBNAIL_CONTEXT.crop_size / THUMBNAIL_CONTEXT.out_size  # 9 image pixels per pixel
+    centre = THUMBNAIL_CONTEXT.centre
+    assert rows.min() == pytest.approx(centre + 60 / step, abs=1.0)  # below the centre, 60 px away
+    assert rows.max() == pytest.approx(centre + 120 / step, abs=1.0)
+    checker = PLANE + 0.001 * np.where((np.add.outer(np.arange(K.height), np.arange(K.width)) % 2) == 0, 1.0, -1.0)
+    smooth = extract_context_thumbnails(checker.astype(np.float32), pixels + 0.0, angles)[0]
+    assert np.abs(smooth - PLANE).max() <= 0.001 / 81 + 1e-6
 
 
 def test_visibility_accepts_the_surface_and_rejects_occluded_or_outside_points():

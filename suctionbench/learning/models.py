@@ -56,6 +56,18 @@ features, and the sizes are chosen so the grasp point stays on the centre of eve
 and the rotation of training-time symmetrisation. Parameters: 416 + 2,320 + 2,320 + 25,664 (fc)
 + 48 (pose) + 5,184 (merge) + 130 (out) = 36,082; cost 0.91 M multiply-accumulates (1.8 MFLOP) per
 grasp, ~146x less than dn3. Same initialisation as dn3.
+
+context, context-wide: what decides the label, in view
+------------------------------------------------------
+With a physical cup the robust label depends on the gravity torque, i.e. on where the grasp lies
+relative to the object's centre of mass, and the 96-pixel crop (~11 cm at 0.6 m) cannot see the
+centre of a long or large object. These nets add a second image stream of compact's layout that
+reads the context thumbnail (`suctionbench.sensing.thumbnails.THUMBNAIL_CONTEXT`: 3x the field of
+view, 288 pixels, at the same 32 x 32, each pixel a 9 x 9 block mean), rotated like the grasp
+thumbnail so training-time flips apply to both channels alike. Inputs: images (B, 2, 32, 32) =
+(grasp, context). context: 2 x 30,720 (image streams) + 48 (pose) + 9,280 (merge: (2 x 64 + 16)
+x 64 + 64) + 130 = 70,898 parameters, 1.8 M multiply-accumulates per grasp; context-wide, twice
+the filters and fc widths: 281,058 parameters, 6.0 M multiply-accumulates.
 """
 
 from __future__ import annotations
@@ -112,32 +124,44 @@ class _ConvBlock(nn.Sequential):
         super().__init__(*layers)
 
 
-class GQCNN(nn.Module):
-    """Two-stream GQ-CNN: conv image stream + fc, fc pose stream, merged by fc layers into 2 logits.
+def _image_stream(convs: Sequence[tuple[str, int, int, bool, bool]], padding: str, image_fc: int) -> nn.Sequential:
+    """conv blocks on one 32 x 32 channel, flattened into a ReLU fc layer of `image_fc` features."""
+    layers: dict[str, nn.Module] = {}
+    channels, size = 1, IMAGE_SIZE
+    for name, out_channels, kernel, lrn, pool in convs:
+        layers[name] = _ConvBlock(channels, out_channels, kernel, padding=padding, lrn=lrn, pool=pool)
+        channels = out_channels
+        size = size if padding == "same" else size - kernel + 1
+        size = size // 2 if pool else size
+    layers.update(flatten=nn.Flatten(), fc3=nn.Linear(channels * size * size, image_fc), relu3=nn.ReLU())
+    return nn.Sequential(OrderedDict(layers))
 
-    The two architectures differ only in their layer sizes (`_SPECS`), so one class builds both.
+
+class GQCNN(nn.Module):
+    """GQ-CNN: conv image stream + fc, fc pose stream, merged by fc layers into 2 logits; with
+    `context`, a second image stream of the same layout reads the context thumbnail (channel 1).
+
+    The architectures differ only in their layer sizes and the context stream (`_SPECS`), so one
+    class builds them all. `image_channels` is 1 (the grasp thumbnail) or 2 (grasp, context).
     """
 
     def __init__(self, convs: Sequence[tuple[str, int, int, bool, bool]], padding: str, image_fc: int, pose_fc: int,
-                 merge_fc: int):
+                 merge_fc: int, context: bool = False):
         super().__init__()
-        layers: dict[str, nn.Module] = {}
-        channels, size = 1, IMAGE_SIZE
-        for name, out_channels, kernel, lrn, pool in convs:
-            layers[name] = _ConvBlock(channels, out_channels, kernel, padding=padding, lrn=lrn, pool=pool)
-            channels = out_channels
-            size = size if padding == "same" else size - kernel + 1
-            size = size // 2 if pool else size
-        layers.update(flatten=nn.Flatten(), fc3=nn.Linear(channels * size * size, image_fc), relu3=nn.ReLU())
         # gqcnn's layer names (conv*, fc3, pc1, fc4, fc5) name the tensors of a saved model.
-        self.image_stream = nn.Sequential(OrderedDict(layers))
+        self.image_stream = _image_stream(convs, padding, image_fc)
+        self.context_stream = _image_stream(convs, padding, image_fc) if context else None
+        self.image_channels = 2 if context else 1
         self.pose_stream = nn.Sequential(OrderedDict(pc1=nn.Linear(POSE_DIM, pose_fc), relu=nn.ReLU()))
-        self.merge = nn.Sequential(OrderedDict(fc4=nn.Linear(image_fc + pose_fc, merge_fc), relu=nn.ReLU(),
-                                               fc5=nn.Linear(merge_fc, 2)))
+        self.merge = nn.Sequential(OrderedDict(fc4=nn.Linear(self.image_channels * image_fc + pose_fc, merge_fc),
+                                               relu=nn.ReLU(), fc5=nn.Linear(merge_fc, 2)))
 
     def forward(self, images: torch.Tensor, poses: torch.Tensor) -> torch.Tensor:
-        """Logits (B, 2) for normalised images (B, 1, 32, 32) and poses (B, 2)."""
-        return self.merge(torch.cat([self.image_stream(images), self.pose_stream(poses)], dim=1))
+        """Logits (B, 2) for normalised images (B, image_channels, 32, 32) and poses (B, 2)."""
+        features = [self.image_stream(images[:, :1])]
+        if self.context_stream is not None:
+            features.append(self.context_stream(images[:, 1:2]))
+        return self.merge(torch.cat([*features, self.pose_stream(poses)], dim=1))
 
 
 _SPECS: dict[str, dict] = {
@@ -147,6 +171,13 @@ _SPECS: dict[str, dict] = {
             "padding": "same", "image_fc": 1024, "pose_fc": 128, "merge_fc": 1024},
     "compact": {"convs": [("conv1", 16, 5, False, True), ("conv2", 16, 3, False, False), ("conv3", 16, 3, False, True)],
                 "padding": "valid", "image_fc": 64, "pose_fc": 16, "merge_fc": 64},
+    # compact's layout twice: the grasp thumbnail and the context thumbnail (module doc, "context")
+    "context": {"convs": [("conv1", 16, 5, False, True), ("conv2", 16, 3, False, False), ("conv3", 16, 3, False, True)],
+                "padding": "valid", "image_fc": 64, "pose_fc": 16, "merge_fc": 64, "context": True},
+    # the same with twice the filters and fc widths: the capacity step of the size sweep
+    "context-wide": {"convs": [("conv1", 32, 5, False, True), ("conv2", 32, 3, False, False),
+                               ("conv3", 32, 3, False, True)],
+                     "padding": "valid", "image_fc": 128, "pose_fc": 32, "merge_fc": 128, "context": True},
 }
 
 ARCHITECTURES = tuple(_SPECS)
@@ -221,7 +252,7 @@ def _dummy_forward(model: nn.Module, modules: list[nn.Module], hook) -> None:
     try:
         with torch.no_grad():
             param = next(model.parameters())
-            model(torch.zeros(1, 1, IMAGE_SIZE, IMAGE_SIZE, device=param.device),
+            model(torch.zeros(1, getattr(model, "image_channels", 1), IMAGE_SIZE, IMAGE_SIZE, device=param.device),
                   torch.zeros(1, POSE_DIM, device=param.device))
     finally:
         for handle in handles:

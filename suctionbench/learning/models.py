@@ -183,6 +183,10 @@ _SPECS: dict[str, dict] = {
 ARCHITECTURES = tuple(_SPECS)
 """Names `build_model` accepts."""
 
+TRAINABLE_ARCHITECTURES = tuple(name for name, spec in _SPECS.items() if not spec.get("context"))
+"""Names `train` accepts: the context nets need datasets that store the context thumbnail beside
+the grasp thumbnail, which `generate` does not write yet."""
+
 
 def init_weights(model: nn.Module, generator: torch.Generator | None = None) -> None:
     """gqcnn's initialisation: weights and hidden biases ~ truncated normal, std sqrt(2 / fan_in); output bias 0.

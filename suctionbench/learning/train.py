@@ -66,7 +66,13 @@ from suctionbench.learning.data import (
     to_tensors,
 )
 from suctionbench.learning.metrics import average_precision, plot_precision_recall, precision_recall_curve
-from suctionbench.learning.models import ARCHITECTURES, activation_bytes, build_model, count_macs, count_parameters
+from suctionbench.learning.models import (
+    TRAINABLE_ARCHITECTURES,
+    activation_bytes,
+    build_model,
+    count_macs,
+    count_parameters,
+)
 
 PR_CURVE_NAME = "precision_recall.png"
 
@@ -143,7 +149,7 @@ class TrainConfig:
             return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
 
         checks = {
-            "arch": (self.arch in ARCHITECTURES, f"one of {', '.join(ARCHITECTURES)}"),
+            "arch": (self.arch in TRAINABLE_ARCHITECTURES, f"one of {', '.join(TRAINABLE_ARCHITECTURES)}"),
             "epochs": (integer(self.epochs, 1), "an integer >= 1"),
             "batch_size": (integer(self.batch_size, 1), "an integer >= 1"),
             "learning_rate": (number(self.learning_rate) and self.learning_rate > 0, "a number > 0"),

@@ -83,9 +83,7 @@ def test_the_cup_lands_on_the_planned_grasp():
 
     def record_contact(data, cup):
         if not offsets and cup.candidate >= 0:
-            axis = data.xmat[cup.bellow].reshape(3, 3)[:, 2]
-            v = point - data.xpos[cup.bellow]
-            offsets.append(float(np.linalg.norm(v - (v @ axis) * axis)))
+            offsets.append(cup.axis_offset(data, point))
 
     runner.episode.recorder, runner.episode.record_every = record_contact, 1
     result = runner.episode.execute(point, approach)

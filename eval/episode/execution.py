@@ -23,20 +23,20 @@ from suctionbench.objects.registry import list_objects
 from suctionbench.sim.pick import PickRequest, PickRunner
 
 
-def landing_offset(episode, point: np.ndarray, approach: np.ndarray) -> float | None:
-    """Run the pick at (point, approach) and return the bellows axis' distance (m) from `point` at
-    the first leak test that finds an object under the lip (None if it never touched)."""
+def landing_offset(episode, point: np.ndarray, approach: np.ndarray) -> tuple[float | None, object]:
+    """Run the pick at (point, approach); return the bellows axis' distance (m) from `point` at the
+    first step the leak test finds an object under the lip (None if it never touched), and the
+    episode's result."""
     seen: list[float] = []
 
     def record(data, cup) -> None:
         if not seen and cup.candidate >= 0:
-            axis = data.xmat[cup.bellow].reshape(3, 3)[:, 2]
-            v = point - data.xpos[cup.bellow]
-            seen.append(float(np.linalg.norm(v - (v @ axis) * axis)))
+            seen.append(cup.axis_offset(data, point))
 
+    every = episode.record_every
     episode.recorder, episode.record_every = record, 1
     result = episode.execute(point, approach)
-    episode.recorder, episode.record_every = None, 10
+    episode.recorder, episode.record_every = None, every
     return (seen[0] if seen else None), result
 
 

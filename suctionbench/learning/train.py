@@ -397,12 +397,12 @@ def _foreign_output(out_dir: Path) -> str | None:
     return None
 
 
-def _check_sizes(config: TrainConfig, out_dir: Path, num_train: int, device: torch.device) -> None:
-    """InputError before any training if the checkpoints do not fit on the disk under `out_dir`, or
-    (on the CPU) a training batch does not fit in memory."""
+def _check_sizes(config: TrainConfig, out_dir: Path, network: torch.nn.Module, num_train: int,
+                 device: torch.device) -> None:
+    """InputError before any training if the checkpoints of `network` do not fit on the disk under
+    `out_dir`, or (on the CPU) a training batch does not fit in memory."""
     from suctionbench.validate import require_disk, require_memory
 
-    network = build_model(config.arch)
     existing = sum((out_dir / n).stat().st_size for n in (WEIGHTS_NAME, STATE_NAME) if (out_dir / n).is_file())
     need = CHECKPOINT_BYTES_PER_PARAMETER * count_parameters(network) + 2**20 - existing
     require_disk(out_dir, need, f"--arch {config.arch} checkpoints")
@@ -447,7 +447,8 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
     if foreign is not None:  # never replace (nor, with overwrite, delete) a file suctionbench did not write
         raise InputError(f"output '{out_dir}': holds '{foreign}', which suctionbench did not write; nothing "
                          "replaced (move it away or choose another --out)")
-    _check_sizes(config, out_dir, train_data.num_datapoints, device)
+    network = build_model(config.arch, torch.Generator().manual_seed(_torch_seed(seq_init))).to(device)
+    _check_sizes(config, out_dir, network, train_data.num_datapoints, device)
     if overwrite:
         _remove_outputs(out_dir)
     saved = load_train_state(out_dir)
@@ -457,7 +458,6 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
                          f"(differs in: {changed}); use another output directory or overwrite it (--overwrite)")
 
     stats = NormStats.from_dict(saved["stats"]) if saved is not None else train_data.compute_stats()
-    network = build_model(config.arch, torch.Generator().manual_seed(_torch_seed(seq_init))).to(device)
     optimizer = torch.optim.SGD(network.parameters(), lr=config.learning_rate, momentum=config.momentum,
                                 weight_decay=config.weight_decay)
     decay = _StaircaseDecay(config.batch_size, config.decay_epochs * train_data.num_datapoints, config.decay_rate)

@@ -411,6 +411,13 @@ class SuctionController:
         """How far (m) the bellows is compressed."""
         return -float(data.qpos[self.slide_qpos])
 
+    def axis_offset(self, data: mujoco.MjData, point: np.ndarray) -> float:
+        """Distance (m) of `point` from the bellows' axis: how far beside a planned grasp point the
+        cup stands (measured where the lip lands: the landing offset of eval/episode)."""
+        axis = data.xmat[self.bellow].reshape(3, 3)[:, 2]
+        v = np.asarray(point, dtype=float) - data.xpos[self.bellow]
+        return float(np.linalg.norm(v - (v @ axis) * axis))
+
     def vacuum(self, data: mujoco.MjData) -> float:
         """The cup's vacuum as a fraction of the ejector's p_max (the actuators' filtered state)."""
         return float(data.act[self._act])

@@ -121,6 +121,20 @@ class CupConfig:
     carries only what the bellows resists (contact/wrench.py, `bellows_swing`). False: a cup rigid
     in bending, as the paper's quasi-static model (the `paper` preset)."""
 
+    swing_overshoot: bool = True
+    """The load reaches the bellows in a jerk (the object leaves the table, the transport starts),
+    and a lightly damped swing overshoots its equilibrium: the labeller judges the lip at the
+    swing's first turning point (contact/wrench.py, `lip_load`). False: at the static equilibrium
+    (the load applied slowly)."""
+
+    bellows_loss_factor: float = 0.1
+    """Loss factor eta (tan delta) of the bellows' silicone: the energy a bending cycle dissipates
+    over 2 pi times the energy it stores. Unfilled silicone rubbers are among the least lossy
+    elastomers (dynamic-mechanical loss factors of roughly 0.05-0.15 at room temperature and
+    1-10 Hz, against 0.3-1 for damping compounds); 0.1 is taken. Equivalent damping ratio
+    zeta = eta / 2: the labeller's swing overshoot (`swing_overshoot_fraction`), and the simulated
+    bellows' tilt damping eta k_b / omega at its swing frequency (SimCupConfig.tilt_damping)."""
+
     def __post_init__(self) -> None:
         checks = {
             "seal_model": self.seal_model in SEAL_MODELS,
@@ -141,6 +155,7 @@ class CupConfig:
             "friction": 0.0 <= self.friction <= 10.0,
             "safety_factor": self.safety_factor >= 1.0,
             "peak_acceleration": self.peak_acceleration >= 0.0,
+            "bellows_loss_factor": 0.0 <= self.bellows_loss_factor < 2.0,
             "vacuum_force_override": self.vacuum_force_override is None or self.vacuum_force_override > 0.0,
             "kappa": self.kappa is None or self.kappa > 0.0,
         }
@@ -180,6 +195,14 @@ class CupConfig:
         folds a lip pressed evenly onto a flat face by lip_fold_fraction x lip_travel,
         K = V / (lip_fold_fraction x lip_travel) (7960 N/m by default). Per radian of lip: K / 2 pi."""
         return self.vacuum_force / (self.lip_fold_fraction * self.lip_travel)
+
+    @property
+    def swing_overshoot_fraction(self) -> float:
+        """How much of an undamped swing's overshoot survives the bellows' damping: a step load on
+        a spring-mass system of damping ratio zeta = eta / 2 overshoots its equilibrium by
+        exp(-pi zeta / sqrt(1 - zeta^2)) of the undamped overshoot (0.855 at eta = 0.1)."""
+        zeta = 0.5 * self.bellows_loss_factor
+        return math.exp(-math.pi * zeta / math.sqrt(1.0 - zeta * zeta))
 
     @property
     def approach_tolerance(self) -> float:

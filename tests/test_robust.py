@@ -7,17 +7,19 @@ with no axial load, r (V - m g) / 2 with the object's weight m g pulling along t
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 from conftest import box
+from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
 from suctionbench.config import STANDARD_GRAVITY, LabelConfig, PerturbationConfig
 from suctionbench.contact import METRICS, SuctionLabeller
 from suctionbench.contact.robust import sample_perturbations
-from suctionbench.contact.wrench import bellows_swing, external_wrench_at_contact, resists
+from suctionbench.contact.wrench import lip_load, resists
 from suctionbench.errors import InputError
 from suctionbench.geometry.sampling import sample_surface_grasps
 from suctionbench.geometry.shapes import superellipsoid
@@ -63,12 +65,33 @@ def test_side_grasp_needs_friction_against_gravity(cup):
     # sqrt(3) m g <= mu (f_z + V) with f_z = 0 (no load along v): m <= mu V / (sqrt(3) g) = 0.23 kg
     # at mu = 0.5. The tilting torque about the contact, m g times the 2 cm lever to the COM, must
     # also stay within the ring limit r V / 2 = 29.9 mN m (f_z = 0): m <= 0.0299 / (0.02 g) =
-    # 0.152 kg. So 0.14 kg holds, 0.17 kg does not (peel, well before friction gives).
+    # 0.152 kg. So on a cup rigid in bending 0.14 kg holds, 0.17 kg does not (peel, well before
+    # friction gives).
+    # The bellows bends instead: the cube swings down about the lip centre with the moment
+    # M(t) = m g d cos t (d = 2 cm; the weight is across the arm, so no pendulum term), and with
+    # its weight applied at once it turns first where m g d sin t = k_b t^2 / 2 (energy), less
+    # the silicone's loss (share D of the overshoot past the equilibrium t_s: m g d cos t_s = k_b
+    # t_s). The stop (21.8 deg) is reached from m = 34 g: a 15 mm bellows cannot hold a 4 cm cube
+    # from the side beyond that, whatever the lip's limits (the swing strikes the stop).
     mesh = box((0.04, 0.04, 0.04))
     point, approach = np.array([[0.02, 0.0, 0.0]]), np.array([[-1.0, 0.0, 0.0]])
     assert cup.radius * cup.vacuum_force / 2 / (0.02 * STANDARD_GRAVITY) == pytest.approx(0.152, abs=1e-3)
-    assert SuctionLabeller(mesh, mass=0.14).wrench_resistance(point, approach)[0]
-    assert not SuctionLabeller(mesh, mass=0.17).wrench_resistance(point, approach)[0]
+    rigid = LabelConfig(cup=dataclasses.replace(cup, bellows_swing=False))
+    assert SuctionLabeller(mesh, rigid, mass=0.14).wrench_resistance(point, approach)[0]
+    assert not SuctionLabeller(mesh, rigid, mass=0.17).wrench_resistance(point, approach)[0]
+    k, stop, zeta = cup.bending_stiffness, cup.approach_tolerance, cup.bellows_loss_factor / 2
+    share = math.exp(-math.pi * zeta / math.sqrt(1 - zeta * zeta))
+
+    def turning(m: float) -> float:
+        a = m * STANDARD_GRAVITY * 0.02
+        t_s = brentq(lambda t: a * math.cos(t) - k * t, 0.0, 2.0)
+        t_u = brentq(lambda t: a * math.sin(t) - k * t * t / 2, t_s, 3.0)
+        return t_s + share * (t_u - t_s)
+
+    m_stop = brentq(lambda m: turning(m) - stop, 1e-3, 0.15)
+    assert m_stop == pytest.approx(0.034, abs=1e-3)
+    assert SuctionLabeller(mesh, mass=0.95 * m_stop).wrench_resistance(point, approach)[0]
+    assert not SuctionLabeller(mesh, mass=1.05 * m_stop).wrench_resistance(point, approach)[0]
 
 
 @pytest.fixture(scope="module")
@@ -102,9 +125,8 @@ def test_robust_label_is_the_composition_of_its_parts(soap):
     )
     seal = labeller.seal_model.evaluate(samples.points, samples.frames)
     assert samples.loads.shape == (len(samples.points), 1, 3)  # no inertial load by default
-    load = bellows_swing(samples.force, samples.com, seal.ring_centre, samples.frames, labeller.config.cup)
-    wrench = external_wrench_at_contact(load, samples.com, seal.ring_centre, samples.frames)
-    resisted = resists(wrench, samples.friction, labeller.config.cup, seal.vacuum_force, seal.lip_heights)
+    wrench, holds = lip_load(samples.force, samples.com, seal.ring_centre, samples.frames, labeller.config.cup)
+    resisted = holds & resists(wrench, samples.friction, labeller.config.cup, seal.vacuum_force, seal.lip_heights)
     composed = (seal.seal & resisted).reshape(outcomes.shape)
     np.testing.assert_array_equal(outcomes, composed)
     np.testing.assert_array_equal(rwr, composed.mean(axis=1))

@@ -12,7 +12,7 @@ from suctionbench.config import STANDARD_GRAVITY, LabelConfig
 from suctionbench.contact.metrics import METRICS, GraspLabels
 from suctionbench.contact.robust import ObjectState, inertial_forces, robust_wrench_resistance
 from suctionbench.contact.seal import SealModel, SealResult
-from suctionbench.contact.wrench import bellows_swing, external_wrench_at_contact, resists
+from suctionbench.contact.wrench import lip_load, resists
 from suctionbench.errors import InputError
 from suctionbench.geometry.frames import approach_frames
 from suctionbench.geometry.mesh import MeshInfo, validate_mesh
@@ -89,9 +89,8 @@ class SuctionLabeller:
         com = np.broadcast_to(self.object.com, points.shape)
         ok = seal.seal.copy()
         for case in range(loads.shape[1]):
-            load = bellows_swing(loads[:, case], com, seal.ring_centre, frames, self.config.cup)
-            wrench = external_wrench_at_contact(load, com, seal.ring_centre, frames)
-            ok &= resists(wrench, self.config.cup.friction, self.config.cup, seal.vacuum_force, seal.lip_heights)
+            wrench, holds = lip_load(loads[:, case], com, seal.ring_centre, frames, self.config.cup)
+            ok &= holds & resists(wrench, self.config.cup.friction, self.config.cup, seal.vacuum_force, seal.lip_heights)
         return ok
 
     def robust(

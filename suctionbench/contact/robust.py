@@ -32,7 +32,7 @@ from scipy.special import ndtr, ndtri
 
 from suctionbench.config import CupConfig, PerturbationConfig
 from suctionbench.contact.seal import SealModel
-from suctionbench.contact.wrench import bellows_swing, external_wrench_at_contact, resists, resists_qp
+from suctionbench.contact.wrench import lip_load, resists, resists_qp
 from suctionbench.geometry.frames import so3_exp
 
 CHUNK_SAMPLES = 8192
@@ -194,6 +194,7 @@ def _wrench_gate(loads: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.
     centres, the vacuum force and the lip's profile. The seal model asks twice (seal.Gate) with
     the same ring centres, so each sample's swung wrench is computed once and kept."""
     wrenches = np.full((len(loads), loads.shape[1], 6), np.nan)
+    holds = np.ones((len(loads), loads.shape[1]), dtype=bool)
     known = np.zeros(len(loads), dtype=bool)
 
     def gate(
@@ -203,10 +204,9 @@ def _wrench_gate(loads: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.
         new = ~known[idx]
         todo, at = idx[new], centres[new]
         for case in range(loads.shape[1]):
-            load = bellows_swing(loads[todo, case], com[todo], at, frames[todo], cup)
-            wrenches[todo, case] = external_wrench_at_contact(load, com[todo], at, frames[todo])
+            wrenches[todo, case], holds[todo, case] = lip_load(loads[todo, case], com[todo], at, frames[todo], cup)
         known[todo] = True
-        ok = np.ones(len(idx), dtype=bool)
+        ok = holds[idx].all(axis=1)
         for case in range(loads.shape[1]):
             ok &= resists(wrenches[idx, case], mu[idx], cup, vacuum, lip_heights, rim_bound=rim_bound)
         return ok
@@ -224,16 +224,17 @@ def evaluate_samples_reference(seal: SealModel, samples: GraspSamples) -> np.nda
         if not result.seal[0]:
             continue
         centre, frame = result.ring_centre[0], samples.frames[i]
-        swung = bellows_swing(loads[i], np.broadcast_to(samples.com[i], loads[i].shape),
-                              np.broadcast_to(centre, loads[i].shape), np.broadcast_to(frame, (len(loads[i]), 3, 3)),
-                              seal.cup)
-        out[i] = all(
+        wrenches, holds = lip_load(loads[i], np.broadcast_to(samples.com[i], loads[i].shape),
+                                   np.broadcast_to(centre, loads[i].shape),
+                                   np.broadcast_to(frame, (len(loads[i]), 3, 3)), seal.cup)
+        out[i] = bool(holds.all()) and all(
             resists_qp(
                 load, samples.com[i], centre, frame, float(samples.friction[i]),
                 seal.cup, vacuum_force=float(result.vacuum_force[0]),
                 lip_heights=None if result.lip_heights is None else result.lip_heights[0],
+                wrench_contact=wrench,
             )[0]
-            for load in swung
+            for load, wrench in zip(loads[i], wrenches)
         )
     return out
 

@@ -155,35 +155,125 @@ def bellows_swing(
     where it is still positive at theta_max the bellows rests on its stop at theta_max. Twisting
     moments (about z) are not relieved: the bellows is stiff in torsion. Left out: the bellows'
     own tilt from sealing on a face off the approach (its moment k_b alpha, and the range it
-    leaves), and the swing's dynamics (a suddenly applied load overshoots the static tilt).
+    leaves). The swing's dynamics (a suddenly applied load overshoots the static tilt) are
+    `lip_load`'s.
     """
     force = np.asarray(force, dtype=float)
     if not cup.bellows_swing:
         return force
-    f_c = np.einsum("nji,nj->ni", frames, force)
-    r_c = np.einsum("nji,nj->ni", frames, np.asarray(com, dtype=float) - ring_centre)
-    tau = np.cross(r_c, f_c)
-    a = np.hypot(tau[:, 0], tau[:, 1])
-    tips = a > 1e-15
-    n = np.zeros_like(f_c)
-    n[tips, :2] = tau[tips, :2] / a[tips, None]
-    n_f = np.einsum("ni,ni->n", n, f_c)
-    b = np.einsum("ni,ni->n", r_c, f_c) - n_f * np.einsum("ni,ni->n", n, r_c)
-    k, theta_max = cup.bending_stiffness, cup.approach_tolerance
+    swing = _Swing(force, com, ring_centre, frames, cup)
+    return np.einsum("nij,nj->ni", frames, swing.turned(swing.static_tilt()))
 
-    def excess(theta: np.ndarray) -> np.ndarray:
-        return a * np.cos(theta) - b * np.sin(theta) - k * theta
 
-    low, high = np.zeros_like(a), np.full_like(a, theta_max)
+class _Swing:
+    """The bellows' swing as a one-axis pendulum (see `bellows_swing`): the load's moment about the
+    tilt axis n at tilt theta is A cos(theta) - B sin(theta), the bellows returns k_b theta."""
+
+    def __init__(self, force: np.ndarray, com: np.ndarray, ring_centre: np.ndarray, frames: np.ndarray,
+                 cup: CupConfig):
+        self.f = np.einsum("nji,nj->ni", frames, force)
+        self.r = np.einsum("nji,nj->ni", frames, np.asarray(com, dtype=float) - ring_centre)
+        tau = np.cross(self.r, self.f)
+        self.a = np.hypot(tau[:, 0], tau[:, 1])
+        self.tips = self.a > 1e-15
+        self.n = np.zeros_like(self.f)
+        self.n[self.tips, :2] = tau[self.tips, :2] / self.a[self.tips, None]
+        self.n_f = np.einsum("ni,ni->n", self.n, self.f)
+        self.b = np.einsum("ni,ni->n", self.r, self.f) - self.n_f * np.einsum("ni,ni->n", self.n, self.r)
+        self.k, self.theta_max = cup.bending_stiffness, cup.approach_tolerance
+
+    def moment(self, theta: np.ndarray) -> np.ndarray:
+        """The load's moment about n at tilt theta, less the bellows' return."""
+        return self.a * np.cos(theta) - self.b * np.sin(theta) - self.k * theta
+
+    def work(self, theta: np.ndarray) -> np.ndarray:
+        """Work done by the load from rest at 0 to theta, less the bellows' stored energy: the
+        swing's kinetic energy at theta when the load is applied at once."""
+        return self.a * np.sin(theta) + self.b * (np.cos(theta) - 1.0) - 0.5 * self.k * theta * theta
+
+    def turned(self, theta: np.ndarray) -> np.ndarray:
+        """The load seen from the object tilted by theta about n (contact frame)."""
+        c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
+        return self.f * c - np.cross(self.n, self.f) * s + self.n * self.n_f[:, None] * (1.0 - c)
+
+    def static_tilt(self) -> np.ndarray:
+        """Equilibrium tilt: moment(theta) = 0 on [0, theta_max], or theta_max on the stop."""
+        theta = _bisect(self.moment, np.zeros_like(self.a), np.full_like(self.a, self.theta_max))
+        theta = np.where(self.moment(np.full_like(self.a, self.theta_max)) > 0.0, self.theta_max, theta)
+        return np.where(self.tips, theta, 0.0)
+
+
+def _bisect(fn, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """Vectorised bisection of fn, positive at `low` and not at `high`."""
     for _ in range(SWING_BISECTIONS):
         mid = 0.5 * (low + high)
-        right = excess(mid) > 0.0
+        right = fn(mid) > 0.0
         low, high = np.where(right, mid, low), np.where(right, high, mid)
-    theta = np.where(excess(np.full_like(a, theta_max)) > 0.0, theta_max, 0.5 * (low + high))
-    theta = np.where(tips, theta, 0.0)
-    c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
-    swung = f_c * c - np.cross(n, f_c) * s + n * n_f[:, None] * (1.0 - c)
-    return np.einsum("nij,nj->ni", frames, swung)
+    return 0.5 * (low + high)
+
+
+def lip_load(
+    force: np.ndarray, com: np.ndarray, ring_centre: np.ndarray, frames: np.ndarray, cup: CupConfig
+) -> tuple[np.ndarray, np.ndarray]:
+    """The wrench (N, 6) the lip must carry (external wrench about the ring centre, contact frame,
+    as `resists` takes it) for a load `force` (N, 3) at `com`, and whether the swing stays off the
+    bellows' stop (N,) bool (False: the lip peels).
+
+    A cup rigid in bending (`cup.bellows_swing` off) carries the load as it is; with
+    `cup.swing_overshoot` off the lip carries the swing's static equilibrium (`bellows_swing`).
+
+    The swing's first turning point (default). The load does not arrive slowly: it meets the lip
+    when the object leaves the table (the table's support drops out within a few ms, against a
+    swing period of ~0.4 s) and when the transport starts. Whatever the load's history, as long
+    as it grows from zero without reversing, an undamped spring-mass system swings furthest when
+    the whole load comes at once (the step is the bound; a dynamic amplification of 2 for a linear
+    spring); the labeller does not know the motion's timing, so it takes the bound. From rest at
+    theta = 0 the swing turns where the load's work equals the bellows' energy (energy
+    conservation, `_Swing.work`):
+
+        A sin(theta_u) + B (cos(theta_u) - 1) = k_b theta_u^2 / 2,
+
+    the first root beyond the equilibrium theta_s (small angles: theta_u = 2 theta_s). The silicone's
+    loss leaves a share D = exp(-pi zeta / sqrt(1 - zeta^2)) of the overshoot, zeta = eta / 2
+    (`CupConfig.swing_overshoot_fraction`): theta_p = theta_s + D (theta_u - theta_s). At theta_p the
+    object is momentarily at rest, so the lip carries the bellows' return k_b theta_p about n, and
+    what turns the object back: Newton about the lip centre, I alpha = M_n - k_b theta_p with
+    I >= m |n x r|^2 (all the mass at the centre of mass: the largest angular acceleration any
+    mass distribution can have). For that point mass the centre of mass accelerates by alpha (n x r)
+    and its angular momentum changes by m alpha r x (n x r), so the lip carries (Newton and Euler,
+    the mass at rest)
+
+        force:  f(theta_p) - m alpha (n x r)
+        moment: r x f(theta_p) - m alpha r x (n x r),   m alpha = (M_n - k_b theta_p) / |n x r|^2,
+
+    M_n = A cos(theta_p) - B sin(theta_p); the moment's part along n is k_b theta_p. At theta_s
+    both reduce to the static swing. A swing whose turning point lies beyond the stop
+    theta_max (one side of the wall at full stroke) strikes the stop while still turning: the
+    stacked wall stops it within a fraction of a degree, a moment far beyond what the lip holds,
+    and the lip peels (holds = False). An equilibrium on the stop is struck the same way.
+    """
+    force = np.asarray(force, dtype=float)
+    if not cup.bellows_swing:
+        return external_wrench_at_contact(force, com, ring_centre, frames), np.ones(len(force), dtype=bool)
+    if not cup.swing_overshoot:
+        swung = bellows_swing(force, com, ring_centre, frames, cup)
+        return external_wrench_at_contact(swung, com, ring_centre, frames), np.ones(len(force), dtype=bool)
+    swing = _Swing(force, com, ring_centre, frames, cup)
+    theta_s = swing.static_tilt()
+    share = cup.swing_overshoot_fraction
+    # The turning point reaches the stop iff theta_u >= reach, i.e. the swing still moves there.
+    reach = theta_s + (swing.theta_max - theta_s) / max(share, 1e-12)
+    on_stop = swing.tips & ((theta_s >= swing.theta_max) | (swing.work(reach) > 0.0))
+    theta_u = _bisect(swing.work, theta_s, reach)
+    theta_p = np.where(swing.tips & ~on_stop, theta_s + share * (theta_u - theta_s), 0.0)
+    f = swing.turned(theta_p)
+    torque = np.cross(swing.r, f)
+    unbalanced = np.where(swing.tips & ~on_stop, swing.moment(theta_p), 0.0)
+    arm = np.cross(swing.n, swing.r)
+    arm2 = np.einsum("ni,ni->n", arm, arm)
+    spin = np.where(arm2 > 1e-12, unbalanced / np.maximum(arm2, 1e-12), 0.0)[:, None]  # m alpha
+    wrench = np.concatenate([f - spin * arm, torque - spin * np.cross(swing.r, arm)], axis=1)
+    return wrench, ~on_stop
 
 
 def lip_angles(count: int) -> np.ndarray:
@@ -296,8 +386,12 @@ def resists_qp(
     cup: CupConfig,
     vacuum_force: float | None = None,
     lip_heights: np.ndarray | None = None,
+    wrench_contact: np.ndarray | None = None,
 ) -> tuple[bool, float]:
     """Reference: solve min_{alpha in F} ||D (G alpha + w)||^2 with Clarabel for one grasp.
+
+    The external wrench w is `force` at `com`, or, given `wrench_contact` (6,) (about the ring
+    centre in the contact frame, as `lip_load` gives it), G wrench_contact.
 
     With `lip_heights` (K,) the tilt limit is the lip-preload half-spaces (`lip_rows`), linear rows
     of the non-negative cone in place of the ring's second-order cone.
@@ -315,7 +409,8 @@ def resists_qp(
     Returns (resisted, residual).
     """
     v = cup.vacuum_force if vacuum_force is None else float(vacuum_force)
-    w = np.concatenate([force, np.cross(com, force)])
+    w = (np.concatenate([force, np.cross(com, force)]) if wrench_contact is None
+         else grasp_map(ring_centre, frame) @ np.asarray(wrench_contact, dtype=float))
     r, v_full = cup.radius, cup.vacuum_force  # the scale D uses the full vacuum: well defined at V = 0
     torque_scale = 0.5 * r * v_full if cup.kappa is None else min(math.pi * r * cup.kappa, r * v_full)
     scale = np.array([cup.radius / torque_scale] * 3 + [1.0 / torque_scale] * 3)

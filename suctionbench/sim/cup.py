@@ -98,8 +98,19 @@ class SimCupConfig:
     """Bellows axial damping (N s/m): about 1.5 x critical for the lip plus a light object (lossy
     silicone). Less lets a light object chatter against the lip under the vacuum pull."""
 
-    tilt_damping: float = 0.01
-    """Bellows tilt damping (N m s/rad): silicone bellows are lossy."""
+    swing_frequency: float = 14.0
+    """Angular frequency (rad/s) of a lifted object's swing on the bellows, at which the tilt
+    damping matches the silicone's loss: sqrt((m g h + k_b) / (m h^2 + I)), centre of mass h below
+    the lip, is 13.4 rad/s for the 0.37 kg cube held at the centre of its top face and 10-18 rad/s
+    for every basic object above 0.15 kg held so (the loads that test the lip); light objects swing
+    faster (up to 150 rad/s, a matchbox) and hardly load it."""
+
+    tilt_damping: float | None = None
+    """Bellows tilt damping (N m s/rad). None: the silicone's, eta k_b / swing_frequency (a
+    hysteretic loss factor eta = CupConfig.bellows_loss_factor acts as a viscous damping
+    eta k / omega at frequency omega): 2.3e-4 for the default cup. It was 0.01, 44x that, which
+    turned a swinging object's speed into moment on the lip (0.019 N m at 107 deg/s, as much as
+    its whole ring limit) and peeled it in the lift."""
 
     tilt_armature: float = 1e-5
     """Armature (kg m^2) of the bellows' tilt hinges. MuJoCo's limit stiffness scales with the dof's
@@ -190,6 +201,12 @@ class SimCupConfig:
         """The rigid reference cup: 8 spheres on one rigid ring, no leak test (speed reference)."""
         return cls(compliant=False, lip_points=8)
 
+    def tilt_damping_for(self, cup: CupConfig) -> float:
+        """The tilt hinges' damping for `cup` (see tilt_damping)."""
+        if self.tilt_damping is not None:
+            return self.tilt_damping
+        return cup.bellows_loss_factor * cup.bending_stiffness / self.swing_frequency
+
     def lip_point_stiffness(self, cup: CupConfig) -> float:
         """Fold stiffness (N/m) of one lip point: the ring's rate `cup.lip_rate`
         (V / (lip_fold_fraction x lip_travel)) shared by the points."""
@@ -256,7 +273,7 @@ def add_suction_tool(
     for axis, label in (([1, 0, 0], "tilt_x"), ([0, 1, 0], "tilt_y")):
         bellow.add_joint(
             name=f"{prefix}_{label}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=axis, pos=[0, 0, cup.height],
-            stiffness=cup.bending_stiffness, damping=sim.tilt_damping, range=[-max_tilt, max_tilt],
+            stiffness=cup.bending_stiffness, damping=sim.tilt_damping_for(cup), range=[-max_tilt, max_tilt],
             limited=True, armature=sim.tilt_armature, solref_limit=list(sim.contact_solref),
         )
     shell_len = (1.0 - sim.shell_height_fraction) * cup.height

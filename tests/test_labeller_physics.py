@@ -441,12 +441,12 @@ def test_swing_turning_point_is_the_pendulums():
         n = np.cross(r0, f) * [1.0, 1.0, 0.0]
         n = n / np.linalg.norm(n)
 
-        def state(t: float) -> tuple[np.ndarray, float, float]:
+        def state(t: float, n=n, r0=r0, f=f) -> tuple[np.ndarray, float, float]:
             r = Rotation.from_rotvec(t * n).apply(r0)
             arm = np.cross(n, r)
             return r, arm @ arm, n @ np.cross(r, f)
 
-        def rhs(_time, y):
+        def rhs(_time, y, m=m, state=state):
             _, inertia, moment = state(y[0])
             return [y[1], (moment - k * y[0]) / (m * inertia)]
 

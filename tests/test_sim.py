@@ -185,16 +185,14 @@ def test_heaviest_object_of_each_set_with_a_centred_grasp(name):
     # The mass cap V / (S (g + a)) = 0.411 kg leaves every object's weight and lift load inside the
     # vacuum with the safety factor; whether the heaviest object of a set is then carried depends
     # on where it can be gripped. Both models must give the same verdict for a grasp straight down
-    # at the sealable point nearest above the centre of mass:
+    # at the sealable point nearest above the centre of mass; none is carried:
     # - basic, box_cube (0.367 kg, 8 cm): a flat face over the centre of mass. Lift: m (g + a) =
     #   4.74 N < V = 7.96 N. Transport: on a rigid cup m a h = 0.367 x 3.1 x 0.04 = 45 mN m would peel
-    #   the lip (r (V - m g) / 2 = 16 mN m), but the bellows swings the cube towards hanging along
-    #   g - a and the lip keeps k_b t ~ 8 mN m: carried, and the labeller's rwr > 0.5. The static
-    #   swing is the labeller's model; the simulated swing overshoots it. Since the arm tracks its
-    #   path (velocity feed-forward, no lag to smooth the transport), the cube at the rated
-    #   3.1 m/s^2 (measured 3.05) peels in the transport; 10 % slower (2.5 m/s^2) it is carried.
-    #   So in the simulation the cube is lifted and then either carried or lost in the transport:
-    #   the swing's dynamics, a disagreement the agreement study reports.
+    #   the lip (r (V - m g) / 2 = 16 mN m); the bellows swings the cube towards hanging along g - a
+    #   (static tilt 14.5 deg, the lip keeps k_b t ~ 8 mN m), but the transport's acceleration
+    #   comes within a fraction of the swing's period and the swing overshoots: its turning point
+    #   lies past the bellows' 21.8 deg stop (the labeller's `lip_load`: rwr < 0.5). The simulated
+    #   cube is lifted and lost in the transport (at the rated 3.1 m/s^2).
     # - typical, hammer_claw (0.389 kg): the surface over the centre of mass is the curved head and
     #   neck; under the perturbations most samples leak or peel (rwr < 0.5) and the simulation loses
     #   the seal in the lift.
@@ -204,16 +202,13 @@ def test_heaviest_object_of_each_set_with_a_centred_grasp(name):
     #   would peel (rwr < 0.5); the simulated lip does not seal there at all.
     heaviest = max(list_objects(name), key=lambda record: record.mass)
     grasp, rwr = centred_grasp(heaviest)
-    expected = {"basic": True, "typical": False, "adversarial": False}[name]
     assert heaviest.name == {"basic": "box_cube", "typical": "hammer_claw", "adversarial": "trefoil_tube"}[name]
     assert heaviest.mass <= CUP_DEFAULT.mass_cap_kg
-    assert (rwr > 0.5) == expected, rwr
+    assert rwr < 0.5, rwr
     _, result = pick(record=heaviest, grasp=grasp)
+    assert result["valid"] and not result["success"], result
     if name == "basic":
-        assert result["valid"] and result["lifted"], result
-        assert result["failure"] in (None, "seal_lost_transport"), result
-    else:
-        assert result["valid"] and result["success"] == expected, result
+        assert result["lifted"] and result["failure"] == "seal_lost_transport", result
 
 
 def test_tool_reaches_a_grid_of_workspace_points_within_joint_limits():

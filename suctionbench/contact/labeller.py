@@ -90,7 +90,8 @@ class SuctionLabeller:
         ok = seal.seal.copy()
         for case in range(loads.shape[1]):
             wrench, holds = lip_load(loads[:, case], com, seal.ring_centre, frames, self.config.cup)
-            ok &= holds & resists(wrench, self.config.cup.friction, self.config.cup, seal.vacuum_force, seal.lip_heights)
+            cup = self.config.cup
+            ok &= holds & resists(wrench, cup.friction, cup, seal.vacuum_force, seal.lip_heights)
         return ok
 
     def robust(

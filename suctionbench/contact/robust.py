@@ -234,7 +234,7 @@ def evaluate_samples_reference(seal: SealModel, samples: GraspSamples) -> np.nda
                 lip_heights=None if result.lip_heights is None else result.lip_heights[0],
                 wrench_contact=wrench,
             )[0]
-            for load, wrench in zip(loads[i], wrenches)
+            for load, wrench in zip(loads[i], wrenches, strict=True)
         )
     return out
 

@@ -89,9 +89,8 @@ class SuctionLabeller:
         com = np.broadcast_to(self.object.com, points.shape)
         ok = seal.seal.copy()
         for case in range(loads.shape[1]):
-            wrench, holds = lip_load(loads[:, case], com, seal.ring_centre, frames, self.config.cup)
-            cup = self.config.cup
-            ok &= holds & resists(wrench, cup.friction, cup, seal.vacuum_force, seal.lip_heights)
+            wrench = lip_load(loads[:, case], com, seal.ring_centre, frames, self.config.cup)
+            ok &= resists(wrench, self.config.cup.friction, self.config.cup, seal.vacuum_force, seal.lip_heights)
         return ok
 
     def robust(

@@ -194,7 +194,6 @@ def _wrench_gate(loads: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.
     centres, the vacuum force and the lip's profile. The seal model asks twice (seal.Gate) with
     the same ring centres, so each sample's swung wrench is computed once and kept."""
     wrenches = np.full((len(loads), loads.shape[1], 6), np.nan)
-    holds = np.ones((len(loads), loads.shape[1]), dtype=bool)
     known = np.zeros(len(loads), dtype=bool)
 
     def gate(
@@ -204,9 +203,9 @@ def _wrench_gate(loads: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.
         new = ~known[idx]
         todo, at = idx[new], centres[new]
         for case in range(loads.shape[1]):
-            wrenches[todo, case], holds[todo, case] = lip_load(loads[todo, case], com[todo], at, frames[todo], cup)
+            wrenches[todo, case] = lip_load(loads[todo, case], com[todo], at, frames[todo], cup)
         known[todo] = True
-        ok = holds[idx].all(axis=1)
+        ok = np.ones(len(idx), dtype=bool)
         for case in range(loads.shape[1]):
             ok &= resists(wrenches[idx, case], mu[idx], cup, vacuum, lip_heights, rim_bound=rim_bound)
         return ok
@@ -224,10 +223,10 @@ def evaluate_samples_reference(seal: SealModel, samples: GraspSamples) -> np.nda
         if not result.seal[0]:
             continue
         centre, frame = result.ring_centre[0], samples.frames[i]
-        wrenches, holds = lip_load(loads[i], np.broadcast_to(samples.com[i], loads[i].shape),
+        wrenches = lip_load(loads[i], np.broadcast_to(samples.com[i], loads[i].shape),
                                    np.broadcast_to(centre, loads[i].shape),
                                    np.broadcast_to(frame, (len(loads[i]), 3, 3)), seal.cup)
-        out[i] = bool(holds.all()) and all(
+        out[i] = all(
             resists_qp(
                 load, samples.com[i], centre, frame, float(samples.friction[i]),
                 seal.cup, vacuum_force=float(result.vacuum_force[0]),

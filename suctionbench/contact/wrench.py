@@ -214,22 +214,20 @@ def _bisect(fn, low: np.ndarray, high: np.ndarray) -> np.ndarray:
 
 def lip_load(
     force: np.ndarray, com: np.ndarray, ring_centre: np.ndarray, frames: np.ndarray, cup: CupConfig
-) -> tuple[np.ndarray, np.ndarray]:
+) -> np.ndarray:
     """The wrench (N, 6) the lip must carry (external wrench about the ring centre, contact frame,
-    as `resists` takes it) for a load `force` (N, 3) at `com`, and whether the swing stays off the
-    bellows' stop (N,) bool (False: the lip peels).
+    as `resists` takes it) for a load `force` (N, 3) at `com`.
 
     A cup rigid in bending (`cup.bellows_swing` off) carries the load as it is; with
     `cup.swing_overshoot` off the lip carries the swing's static equilibrium (`bellows_swing`).
 
     The swing's first turning point (default). The load does not arrive slowly: it meets the lip
-    when the object leaves the table (the table's support drops out within a few ms, against a
-    swing period of ~0.4 s) and when the transport starts. Whatever the load's history, as long
-    as it grows from zero without reversing, an undamped spring-mass system swings furthest when
-    the whole load comes at once (the step is the bound; a dynamic amplification of 2 for a linear
-    spring); the labeller does not know the motion's timing, so it takes the bound. From rest at
-    theta = 0 the swing turns where the load's work equals the bellows' energy (energy
-    conservation, `_Swing.work`):
+    when the object leaves the table and when the transport starts, within a fraction of the
+    swing's period (~0.4 s). Whatever the load's history, as long as it grows from zero without
+    reversing, an undamped spring-mass system swings furthest when the whole load comes at once
+    (the step is the bound; a dynamic amplification of 2 for a linear spring); the labeller does
+    not know the motion's timing, so it takes the bound. From rest at theta = 0 the swing turns
+    where the load's work equals the bellows' energy (energy conservation, `_Swing.work`):
 
         A sin(theta_u) + B (cos(theta_u) - 1) = k_b theta_u^2 / 2,
 
@@ -247,33 +245,37 @@ def lip_load(
         moment: r x f(theta_p) - m alpha r x (n x r),   m alpha = (M_n - k_b theta_p) / |n x r|^2,
 
     M_n = A cos(theta_p) - B sin(theta_p); the moment's part along n is k_b theta_p. At theta_s
-    both reduce to the static swing. A swing whose turning point lies beyond the stop
-    theta_max (one side of the wall at full stroke) strikes the stop while still turning: the
-    stacked wall stops it within a fraction of a degree, a moment far beyond what the lip holds,
-    and the lip peels (holds = False). An equilibrium on the stop is struck the same way.
+    both reduce to the static swing.
+
+    The stop. A swing that would turn beyond theta_max (one side of the wall at full stroke) is
+    caught by the bellows' own wall, folded flat: soft and lossy silicone, not a rigid stop. The
+    lip is taken at theta_max carrying at least what the bent bellows returns there, the formula
+    above at theta_max (the stop's own share during the catch is left out: unknown, and a rigid
+    stop would peel every swing that reaches it, while the simulated bellows, whose stop is a
+    damped constraint, holds objects that swing onto it). An object whose equilibrium lies beyond
+    the stop rests on it and the lip carries the load's whole moment there, as in `bellows_swing`.
     """
     force = np.asarray(force, dtype=float)
     if not cup.bellows_swing:
-        return external_wrench_at_contact(force, com, ring_centre, frames), np.ones(len(force), dtype=bool)
+        return external_wrench_at_contact(force, com, ring_centre, frames)
     if not cup.swing_overshoot:
-        swung = bellows_swing(force, com, ring_centre, frames, cup)
-        return external_wrench_at_contact(swung, com, ring_centre, frames), np.ones(len(force), dtype=bool)
+        return external_wrench_at_contact(bellows_swing(force, com, ring_centre, frames, cup), com, ring_centre, frames)
     swing = _Swing(force, com, ring_centre, frames, cup)
     theta_s = swing.static_tilt()
     share = cup.swing_overshoot_fraction
-    # The turning point reaches the stop iff theta_u >= reach, i.e. the swing still moves there.
+    # The turning point lies beyond the stop iff the swing still moves where it would reach it.
     reach = theta_s + (swing.theta_max - theta_s) / max(share, 1e-12)
-    on_stop = swing.tips & ((theta_s >= swing.theta_max) | (swing.work(reach) > 0.0))
+    on_stop = (theta_s >= swing.theta_max) | (swing.work(reach) > 0.0)
     theta_u = _bisect(swing.work, theta_s, reach)
-    theta_p = np.where(swing.tips & ~on_stop, theta_s + share * (theta_u - theta_s), 0.0)
+    theta_p = np.where(on_stop, swing.theta_max, theta_s + share * (theta_u - theta_s))
+    theta_p = np.where(swing.tips, theta_p, 0.0)
     f = swing.turned(theta_p)
     torque = np.cross(swing.r, f)
-    unbalanced = np.where(swing.tips & ~on_stop, swing.moment(theta_p), 0.0)
+    unbalanced = np.where(swing.tips, np.minimum(swing.moment(theta_p), 0.0), 0.0)
     arm = np.cross(swing.n, swing.r)
     arm2 = np.einsum("ni,ni->n", arm, arm)
     spin = np.where(arm2 > 1e-12, unbalanced / np.maximum(arm2, 1e-12), 0.0)[:, None]  # m alpha
-    wrench = np.concatenate([f - spin * arm, torque - spin * np.cross(swing.r, arm)], axis=1)
-    return wrench, ~on_stop
+    return np.concatenate([f - spin * arm, torque - spin * np.cross(swing.r, arm)], axis=1)
 
 
 def lip_angles(count: int) -> np.ndarray:

@@ -522,7 +522,7 @@ class PickEpisode:
         the tool tip to 5 cm above the table on its way.) Returns the arm configuration at `pre`."""
         c, down = self.config, np.array([0.0, 0.0, -1.0])
         start = self._tip_at(q0)
-        hover = np.array([pre[0], pre[1], max(start[2], pre[2], self._object_z().max() + c.transit_clearance)])
+        hover = np.array([pre[0], pre[1], max(pre[2], self._object_z().max() + c.transit_clearance)])
         across = self._line(start, hover, down, q0, step=0.02)
         self._run(across, self._duration(across, 0.5))
         q_turn = self._ik(hover, approach, across[-1])

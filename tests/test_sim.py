@@ -68,8 +68,8 @@ def test_top_face_centre_of_a_box_seals_lifts_and_reaches_the_bin():
 
 def test_the_cup_lands_on_the_planned_grasp():
     # The arm follows the approach line with the path's velocity fed forward to its PD servos
-    # (torque kp (q_d - q) + kv (qdot_d - qdot)), so what is left is the inertial lag of a
-    # minimum-jerk approach that has nearly stopped by contact: well under a millimetre, against
+    # (torque kp (q_d - q) + kv (qdot_d - qdot)), so what is left is the inertial lag of the
+    # guarded touch-down at 2 cm/s and the arm's give under the press: well under a millimetre, against
     # the 7.5 mm lip radius (without the feed-forward the lag kv qdot / kp put the lip 2.2 mm off,
     # enough to hang it over an edge the labeller's lip cleared). Measured where the lip first finds
     # the object under it: the bellows axis' distance from the planned point.

@@ -45,6 +45,14 @@ def test_layout_shapes_dtypes_and_gqcnn_compatibility(reference):
     shard = reader.shard(0)
     assert shard["depth_ims_tf_table"].shape == (64, 32, 32, 1) and shard["depth_ims_tf_table"].dtype == np.float32
     assert shard["hand_poses"].shape == (64, 7) and shard["robust_suction_wrench_resistance"].shape == (64,)
+    # The context thumbnail: 3x the local crop around the same grasp, each pixel a block mean. Both
+    # are centred on the grasp pixel, so their centres see the same surface: on these objects'
+    # faces the block means (9 px, ~1 cm) differ from the point samples by millimetres, not by the
+    # centimetres between the object and the table.
+    context, local = shard["context_ims_tf_table"], shard["depth_ims_tf_table"]
+    assert context.shape == local.shape and context.dtype == np.float32 and np.isfinite(context).all()
+    centre = np.abs(context[:, 15:17, 15:17, 0].mean(axis=(1, 2)) - local[:, 15:17, 15:17, 0].mean(axis=(1, 2)))
+    assert np.median(centre) < 0.005
     rwr = reader.field("robust_suction_wrench_resistance")
     assert np.all((rwr >= 0) & (rwr <= 1))
     poses = reader.field("hand_poses")

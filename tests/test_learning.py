@@ -91,7 +91,8 @@ def write_synthetic(directory, n: int = N_SYNTH, per_shard: int = 64, seed: int 
         part = slice(start, start + per_shard)
         k = len(metric[part])
         writer.write_shard(start // per_shard, {
-            "depth_ims_tf_table": images[part, ..., None], "hand_poses": poses[part],
+            "depth_ims_tf_table": images[part, ..., None], "context_ims_tf_table": images[part, ..., None],
+            "hand_poses": poses[part],
             "robust_suction_wrench_resistance": metric[part], "object_labels": objects[part],
             "pose_labels": np.zeros(k, np.int32), "image_labels": np.arange(start, start + k, dtype=np.int32),
             "grasp_labels": np.zeros(k, np.int32), "seal_flags": np.ones(k, np.uint8),

@@ -33,6 +33,7 @@ def synthetic(n: int, seed: int = 0) -> dict[str, np.ndarray]:
     image_sizes = rng.integers(1, 12, size=n)  # more than enough images, cut to n datapoints
     return {
         "depth_ims_tf_table": rng.uniform(0.5, 0.7, (n, 32, 32, 1)).astype(np.float32),
+        "context_ims_tf_table": rng.uniform(0.5, 0.7, (n, 32, 32, 1)).astype(np.float32),
         "hand_poses": rng.normal(size=(n, 7)).astype(np.float32),
         "robust_suction_wrench_resistance": rng.uniform(0, 1, n).astype(np.float32),
         "object_labels": np.sort(rng.integers(0, 25, n)).astype(np.int32),

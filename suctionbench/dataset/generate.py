@@ -118,7 +118,13 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
     from suctionbench.objects.build import ObjectRecord
     from suctionbench.sensing.camera import CameraPoseConfig, resolve_camera, sample_camera_pose
     from suctionbench.sensing.noise import apply_depth_noise
-    from suctionbench.sensing.thumbnails import extract_thumbnails, pose_vector, project_grasps, visible_mask
+    from suctionbench.sensing.thumbnails import (
+        extract_context_thumbnails,
+        extract_thumbnails,
+        pose_vector,
+        project_grasps,
+        visible_mask,
+    )
 
     rng = np.random.default_rng((config.seed, unit.index))
     record = ObjectRecord.load(Path(object_dir))
@@ -173,6 +179,8 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
             pose_vec = pose_vector(depths[idx], v_world[idx])
             lab = labels_in_pose(s)
             out["depth_ims_tf_table"].append(thumbs[..., None].astype(np.float32))
+            context = extract_context_thumbnails(noisy, pixels[idx], angles[idx])
+            out["context_ims_tf_table"].append(context[..., None].astype(np.float32))
             out["hand_poses"].append(np.column_stack([pixels[idx, 1], pixels[idx, 0], pose_vec, v_cam[idx]])
                                      .astype(np.float32))
             out["robust_suction_wrench_resistance"].append(lab.rwr[idx].astype(np.float32))

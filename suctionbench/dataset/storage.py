@@ -87,6 +87,8 @@ suction network reads columns 2 and 3."""
 
 FIELDS: dict[str, FieldSpec] = {
     "depth_ims_tf_table": FieldSpec(np.dtype(np.float32), THUMBNAIL_SHAPE, "depth thumbnail (m), grasp-centred"),
+    "context_ims_tf_table": FieldSpec(np.dtype(np.float32), THUMBNAIL_SHAPE,
+                                      "context thumbnail (m): 3x the crop around the grasp, block-averaged"),
     "hand_poses": FieldSpec(np.dtype(np.float32), (len(HAND_POSE_COLUMNS),), "pose vector: " +
                             ", ".join(HAND_POSE_COLUMNS)),
     "robust_suction_wrench_resistance": FieldSpec(np.dtype(np.float32), (), "robust wrench resistance in [0, 1]"),

@@ -122,16 +122,16 @@ class CupConfig:
     in bending, as the paper's quasi-static model (the `paper` preset)."""
 
     swing_overshoot: bool = True
-    """The load reaches the bellows in a jerk (the object leaves the table, the transport starts),
-    and a lightly damped swing overshoots its equilibrium: the labeller judges the lip at the
-    swing's first turning point (contact/wrench.py, `lip_load`). False: at the static equilibrium
-    (the load applied slowly)."""
+    """The load reaches the bellows within about one swing period (the object tips off the table,
+    the transport starts), and a lightly damped swing then overshoots its equilibrium: the labeller
+    judges the lip at the swing's first turning point for a load applied at once, the bound
+    (contact/wrench.py, `lip_load`). False: at the static equilibrium (the load applied slowly)."""
 
     bellows_loss_factor: float = 0.1
     """Loss factor eta (tan delta) of the bellows' silicone: the energy a bending cycle dissipates
-    over 2 pi times the energy it stores. Unfilled silicone rubbers are among the least lossy
-    elastomers (dynamic-mechanical loss factors of roughly 0.05-0.15 at room temperature and
-    1-10 Hz, against 0.3-1 for damping compounds); 0.1 is taken. Equivalent damping ratio
+    over 2 pi times the energy it stores. No cup maker states it; 0.1 is an assumed value for an
+    unfilled silicone, among the least lossy elastomers (not measured for this cup, and the
+    figures' sensitivity to it is not measured yet). Equivalent damping ratio
     zeta = eta / 2: the labeller's swing overshoot (`swing_overshoot_fraction`), and the simulated
     bellows' tilt damping eta k_b / omega at its swing frequency (SimCupConfig.tilt_damping)."""
 

@@ -189,8 +189,8 @@ def test_heaviest_object_of_each_set_with_a_centred_grasp(name):
     # - basic, box_cube (0.367 kg, 8 cm): a flat face over the centre of mass. Lift: m (g + a) =
     #   4.74 N < V = 7.96 N. Transport: on a rigid cup m a h = 0.367 x 3.1 x 0.04 = 45 mN m would peel
     #   the lip (r (V - m g) / 2 = 16 mN m); the bellows swings the cube towards hanging along g - a
-    #   (static tilt 14.5 deg). The transport's acceleration comes within a fraction of the swing's
-    #   period, so the swing overshoots onto the bellows' 21.8 deg stop, where the labeller's lip
+    #   (static tilt 14.5 deg). The transport's acceleration rises in ~0.2 s, less than the swing's
+    #   0.47 s period, so the swing overshoots onto the bellows' 21.8 deg stop, where the labeller's lip
     #   carries k_b t_max = 12 mN m with the recoil (`lip_load`): inside the limit, rwr > 0.5. The
     #   simulated cube is lifted and lost in the transport at the rated 3.1 m/s^2 (carried 10 %
     #   slower): the catch on the stop, whose own moment the labeller leaves out, a disagreement

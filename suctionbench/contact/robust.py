@@ -224,16 +224,16 @@ def evaluate_samples_reference(seal: SealModel, samples: GraspSamples) -> np.nda
             continue
         centre, frame = result.ring_centre[0], samples.frames[i]
         wrenches = lip_load(loads[i], np.broadcast_to(samples.com[i], loads[i].shape),
-                                   np.broadcast_to(centre, loads[i].shape),
-                                   np.broadcast_to(frame, (len(loads[i]), 3, 3)), seal.cup)
+                            np.broadcast_to(centre, loads[i].shape),
+                            np.broadcast_to(frame, (len(loads[i]), 3, 3)), seal.cup)
         out[i] = all(
             resists_qp(
-                load, samples.com[i], centre, frame, float(samples.friction[i]),
+                None, None, centre, frame, float(samples.friction[i]),
                 seal.cup, vacuum_force=float(result.vacuum_force[0]),
                 lip_heights=None if result.lip_heights is None else result.lip_heights[0],
                 wrench_contact=wrench,
             )[0]
-            for load, wrench in zip(loads[i], wrenches, strict=True)
+            for wrench in wrenches
         )
     return out
 

@@ -222,8 +222,9 @@ def lip_load(
     `cup.swing_overshoot` off the lip carries the swing's static equilibrium (`bellows_swing`).
 
     The swing's first turning point (default). The load does not arrive slowly: it meets the lip
-    when the object leaves the table and when the transport starts, within a fraction of the
-    swing's period (~0.4 s). Whatever the load's history, as long as it grows from zero without
+    as the object tips off the table (a brick's tilt built up over ~0.2 s in the simulation) and as
+    the transport's acceleration rises (~0.2 s), about one swing period (0.2-0.65 s for the basic
+    objects above 0.15 kg). Whatever the load's history, as long as it grows from zero without
     reversing, an undamped spring-mass system swings furthest when the whole load comes at once
     (the step is the bound; a dynamic amplification of 2 for a linear spring); the labeller does
     not know the motion's timing, so it takes the bound. From rest at theta = 0 the swing turns
@@ -258,17 +259,16 @@ def lip_load(
     force = np.asarray(force, dtype=float)
     if not cup.bellows_swing:
         return external_wrench_at_contact(force, com, ring_centre, frames)
-    if not cup.swing_overshoot:
-        return external_wrench_at_contact(bellows_swing(force, com, ring_centre, frames, cup), com, ring_centre, frames)
     swing = _Swing(force, com, ring_centre, frames, cup)
-    theta_s = swing.static_tilt()
-    share = cup.swing_overshoot_fraction
-    # The turning point lies beyond the stop iff the swing still moves where it would reach it.
-    reach = theta_s + (swing.theta_max - theta_s) / max(share, 1e-12)
-    on_stop = (theta_s >= swing.theta_max) | (swing.work(reach) > 0.0)
-    theta_u = _bisect(swing.work, theta_s, reach)
-    theta_p = np.where(on_stop, swing.theta_max, theta_s + share * (theta_u - theta_s))
-    theta_p = np.where(swing.tips, theta_p, 0.0)
+    theta_p = swing.static_tilt()  # the static swing: the formula below with nothing unbalanced
+    if cup.swing_overshoot:
+        theta_s, share = theta_p, cup.swing_overshoot_fraction
+        # The turning point lies beyond the stop iff the swing still moves where it would reach it.
+        reach = theta_s + (swing.theta_max - theta_s) / max(share, 1e-12)
+        on_stop = (theta_s >= swing.theta_max) | (swing.work(reach) > 0.0)
+        theta_u = _bisect(swing.work, theta_s, reach)
+        theta_p = np.where(on_stop, swing.theta_max, theta_s + share * (theta_u - theta_s))
+        theta_p = np.where(swing.tips, theta_p, 0.0)
     f = swing.turned(theta_p)
     torque = np.cross(swing.r, f)
     unbalanced = np.where(swing.tips, np.minimum(swing.moment(theta_p), 0.0), 0.0)
@@ -380,8 +380,8 @@ def grasp_map(ring_centre: np.ndarray, frame: np.ndarray) -> np.ndarray:
 
 
 def resists_qp(
-    force: np.ndarray,
-    com: np.ndarray,
+    force: np.ndarray | None,
+    com: np.ndarray | None,
     ring_centre: np.ndarray,
     frame: np.ndarray,
     mu: float,
@@ -393,7 +393,7 @@ def resists_qp(
     """Reference: solve min_{alpha in F} ||D (G alpha + w)||^2 with Clarabel for one grasp.
 
     The external wrench w is `force` at `com`, or, given `wrench_contact` (6,) (about the ring
-    centre in the contact frame, as `lip_load` gives it), G wrench_contact.
+    centre in the contact frame, as `lip_load` gives it; `force` and `com` then None), G wrench_contact.
 
     With `lip_heights` (K,) the tilt limit is the lip-preload half-spaces (`lip_rows`), linear rows
     of the non-negative cone in place of the ring's second-order cone.

@@ -101,9 +101,9 @@ class SimCupConfig:
     swing_frequency: float = 14.0
     """Angular frequency (rad/s) of a lifted object's swing on the bellows, at which the tilt
     damping matches the silicone's loss: sqrt((m g h + k_b) / (m h^2 + I)), centre of mass h below
-    the lip, is 13.4 rad/s for the 0.37 kg cube held at the centre of its top face and 10-18 rad/s
-    for every basic object above 0.15 kg held so (the loads that test the lip); light objects swing
-    faster (up to 150 rad/s, a matchbox) and hardly load it."""
+    the lip, is 13.4 rad/s for the 0.37 kg cube held at the centre of its top face, and 9.7-28.6
+    rad/s (median 13.5) over the ten basic objects above 0.15 kg held so (the loads that test the
+    lip); light objects swing faster (up to 150 rad/s, a matchbox) and hardly load it."""
 
     tilt_damping: float | None = None
     """Bellows tilt damping (N m s/rad). None: the silicone's, eta k_b / swing_frequency (a
@@ -490,10 +490,16 @@ class SuctionController:
         self.leak_area = float(self._leak_area(data, self.candidate))
         return self.leak_area
 
-    def lip_gaps(self, data: mujoco.MjData, body: int) -> np.ndarray:
+    def lip_folds(self, data: mujoco.MjData) -> np.ndarray:
+        """The lip's fold (m, negative: pressed toward the cup) at the leak test's places round the
+        lip circle, linear between its points."""
+        return self._fold_weights @ data.qpos[self.lip_qpos]
+
+    def lip_gaps(self, data: mujoco.MjData, body: int, folds: np.ndarray | None = None) -> np.ndarray:
         """Gap (m) between the lip's edge and `body`'s surface at the leak test's places round the lip
         circle, measured along the cup axis from where a pressed lip rests; `cup.radius` where the
-        surface is missing (over an edge, another body in the way).
+        surface is missing (over an edge, another body in the way). `folds`: `lip_folds(data)`, if
+        the caller has it.
 
         Where the lip rests: a lip sphere (radius rho) pressed on a surface sloping by alpha to the
         lip plane sits with its centre rho + margin from the surface, so its lowest point is
@@ -508,7 +514,7 @@ class SuctionController:
         # In the bellows' frame a lip place is (r cos phi, r sin phi, h + fold(phi)), the lip's edge
         # between its points following their folds (linear interpolation round the circle), and
         # the apex is (0, 0, h - H): the ray to a place is (r cos phi, r sin phi, H + fold).
-        depth = sim.ray_apex_height + self._fold_weights @ data.qpos[self.lip_qpos]
+        depth = sim.ray_apex_height + (self.lip_folds(data) if folds is None else folds)
         length = np.sqrt(cup.radius**2 + depth * depth)
         local = np.column_stack([self._ring, depth]) / length[:, None]
         rays = local @ rot.T
@@ -529,8 +535,8 @@ class SuctionController:
         ring-pressure condition p >= 0; Hudoklin et al.'s validated continuous cup model seals only
         while the lip pressure stays compressive). Without this, a lifting side kept its seal for
         another seal_gap and the simulated cup held 1.17x the ring limit's moment (now 1.01x)."""
-        gaps = self.lip_gaps(data, body)
-        pressed = self._fold_weights @ data.qpos[self.lip_qpos] < 0.0
+        folds = self.lip_folds(data)
+        gaps, pressed = self.lip_gaps(data, body, folds), folds < 0.0
         return float(np.sum(np.maximum(gaps - np.where(pressed, self.cup.seal_gap, 0.0), 0.0)) * self._arc)
 
     # -- the rigid reference ------------------------------------------------------------------------

@@ -106,9 +106,9 @@ class EpisodeConfig:
 
     guarded_speed: float = 0.02
     """Tool speed of the guarded move (m/s), constant until the bellows reports contact, as pick
-    systems touch down. At the approach's old peak speed (~0.14 m/s, the lip meeting the object
-    6 cm into one 9 cm minimum-jerk move) 21 of the agreement study's 1,000 objects were knocked
-    away before the vacuum came on (a lying can rolled 19 cm)."""
+    systems touch down (the old approach met the object near its ~0.14 m/s peak, 6 cm into one
+    9 cm minimum-jerk move; the objects the agreement study found knocked away were hit earlier,
+    by the transit: `transit_clearance`)."""
 
     vacuum_dwell: float = 0.15
     """Time with the vacuum on before lifting (the cup evacuates)."""

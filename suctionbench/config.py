@@ -135,6 +135,17 @@ class CupConfig:
     zeta = eta / 2: the labeller's swing overshoot (`swing_overshoot_fraction`), and the simulated
     bellows' tilt damping eta k_b / omega at its swing frequency (SimCupConfig.tilt_damping)."""
 
+    stop_stiffness: float = 0.35
+    """Tilt stiffness (N m/rad) of the bellows' stop beyond approach_tolerance, where one side of
+    the wall is folded solid and the silicone itself is squeezed. A wall of thickness t at mean
+    radius r_m, stacked h_s high, pressed on one half-circumference with the strain
+    (r_m sin(u) dtheta) / h_s: M = int_0^pi (E t / h_s)(r_m sin u)^2 r_m du dtheta
+    = (pi / 2) E t r_m^3 / h_s. With a Shore 50A silicone (E = 2.46 MPa, Gent's relation), t = 1 mm,
+    h_s = 3 mm (a fold and a half stacked) and r_m = 6.5 mm: 0.35 N m/rad, 11x the bellows' bending
+    and 1.6x the lip's. No cup maker states the wall's geometry; t and h_s are assumed (like
+    bellows_loss_factor). In series with the lip it sets how hard a swing is caught on the stop
+    (contact/wrench.py, `bellows_swing`; the simulated stop spring, sim/cup.py)."""
+
     def __post_init__(self) -> None:
         checks = {
             "seal_model": self.seal_model in SEAL_MODELS,
@@ -156,6 +167,7 @@ class CupConfig:
             "safety_factor": self.safety_factor >= 1.0,
             "peak_acceleration": self.peak_acceleration >= 0.0,
             "bellows_loss_factor": 0.0 <= self.bellows_loss_factor < 2.0,
+            "stop_stiffness": 0.0 < self.stop_stiffness < math.inf,
             "vacuum_force_override": self.vacuum_force_override is None or self.vacuum_force_override > 0.0,
             "kappa": self.kappa is None or self.kappa > 0.0,
         }
@@ -195,6 +207,14 @@ class CupConfig:
         folds a lip pressed evenly onto a flat face by lip_fold_fraction x lip_travel,
         K = V / (lip_fold_fraction x lip_travel) (7960 N/m by default). Per radian of lip: K / 2 pi."""
         return self.vacuum_force / (self.lip_fold_fraction * self.lip_travel)
+
+    @property
+    def lip_tilt_stiffness(self) -> float:
+        """Tilt stiffness of the lip ring (N m/rad): its springs (K / 2 pi per radian at radius r)
+        resist a tilt phi of the object on the lip with int (K / 2 pi)(r phi sin t) r sin t dt
+        = K r^2 phi / 2 (0.22 N m/rad by default, 7x the bellows'). In series with the bellows below
+        its stop, alone beyond it (contact/wrench.py, `lip_load`)."""
+        return 0.5 * self.lip_rate * self.radius**2
 
     @property
     def swing_overshoot_fraction(self) -> float:

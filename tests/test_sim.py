@@ -189,12 +189,11 @@ def test_heaviest_object_of_each_set_with_a_centred_grasp(name):
     # - basic, box_cube (0.367 kg, 8 cm): a flat face over the centre of mass. Lift: m (g + a) =
     #   4.74 N < V = 7.96 N. Transport: on a rigid cup m a h = 0.367 x 3.1 x 0.04 = 45 mN m would peel
     #   the lip (r (V - m g) / 2 = 16 mN m); the bellows swings the cube towards hanging along g - a
-    #   (static tilt 14.5 deg). The transport's acceleration rises in ~0.2 s, less than the swing's
-    #   0.47 s period, so the swing overshoots onto the bellows' 21.8 deg stop, where the labeller's lip
-    #   carries k_b t_max = 12 mN m with the recoil (`lip_load`): inside the limit, rwr > 0.5. The
-    #   simulated cube is lifted and lost in the transport at the rated 3.1 m/s^2 (carried 10 %
-    #   slower): the catch on the stop, whose own moment the labeller leaves out, a disagreement
-    #   the agreement study reports.
+    #   (static tilt 14.9 deg). The transport's acceleration rises in ~0.2 s, less than the swing's
+    #   0.47 s period, so the swing overshoots past the bellows' 21.8 deg stop, where the squeezed
+    #   wall and the lip catch it (`lip_load`); the catch asks more of the lip than its ring holds in
+    #   most transport directions and perturbations: rwr < 0.5. The simulated cube is lifted and
+    #   lost in the transport at the rated 3.1 m/s^2 (carried 10 % slower): the same verdict.
     # - typical, hammer_claw (0.389 kg): the surface over the centre of mass is the curved head and
     #   neck; under the perturbations most samples leak or peel (rwr < 0.5) and the simulation loses
     #   the seal in the lift.
@@ -206,7 +205,7 @@ def test_heaviest_object_of_each_set_with_a_centred_grasp(name):
     grasp, rwr = centred_grasp(heaviest)
     assert heaviest.name == {"basic": "box_cube", "typical": "hammer_claw", "adversarial": "trefoil_tube"}[name]
     assert heaviest.mass <= CUP_DEFAULT.mass_cap_kg
-    assert (rwr > 0.5) == (name == "basic"), rwr
+    assert rwr <= 0.5, rwr
     _, result = pick(record=heaviest, grasp=grasp)
     assert result["valid"] and not result["success"], result
     if name == "basic":

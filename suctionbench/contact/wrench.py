@@ -124,39 +124,47 @@ def external_wrench_at_contact(
     )
 
 
-SWING_BISECTIONS = 32
-"""Bisection steps of the bellows' equilibrium tilt: the bracket [0, approach_tolerance] (0.38 rad)
-shrinks to ~1e-10 rad."""
+SWING_BISECTIONS = 36
+"""Bisection steps of the swing's tilts: the bracket [0, pi/2] shrinks to ~2e-11 rad."""
+
+SWING_CAP = 0.5 * math.pi
+"""Largest tilt (rad) the swing is solved over: far beyond where any lip peels (the lip's tilt
+past the stop reaches its peel limit at ~0.13 rad for the default cup)."""
 
 
 def bellows_swing(
     force: np.ndarray, com: np.ndarray, ring_centre: np.ndarray, frames: np.ndarray, cup: CupConfig
 ) -> np.ndarray:
-    """The load (N, 3) (object frame) as the lifted object feels it once the bellows has bent to
+    """The load (N, 3) (object frame) as the lifted object feels it once the cup has bent to
     equilibrium: the same force, rotated with the object about the lip centre.
 
     Why. A bellows is soft in bending (k_b = cup.bending_stiffness, 0.032 N m/rad by default), so a
     load whose moment tips the lip does not hold the object rigidly: the object and the lip swing
     together, as a pendulum, until the moment about the lip centre has fallen to what the bent
-    bellows returns, k_b theta, or until the bellows reaches its tilt stop theta_max =
-    cup.approach_tolerance (one side of the wall at full stroke), beyond which the stop carries
-    the rest. The seal then carries the swung wrench. A heavy box held at the centre of its top
-    face and carried sideways at a = 3.1 m/s^2 would, rigidly, put m a d (41 mN m for 0.37 kg
-    with its centre 4 cm below the lip) on a lip that holds r (V - m g) / 2 = 16 mN m; swung it
-    hangs along g - a and the lip carries ~8 mN m.
+    cup returns. A heavy box held at the centre of its top face and carried sideways at
+    a = 3.1 m/s^2 would, rigidly, put m a d (41 mN m for 0.37 kg with its centre 4 cm below the
+    lip) on a lip that holds r (V - m g) / 2 = 16 mN m; swung it hangs along g - a and the lip
+    carries ~8 mN m.
+
+    The cup's return R(phi) at the object's tilt phi (`_Swing.returned`): the bellows (k_b) and the
+    lip ring (k_l = cup.lip_tilt_stiffness, 0.22 N m/rad: its springs, which the ring-pressure
+    limit already assumes elastic) in series, k_s = k_b k_l / (k_b + k_l), until the bellows
+    reaches its tilt stop theta_max = cup.approach_tolerance (one side of the wall at full stroke)
+    at phi_stop = theta_max (1 + k_b / k_l). Beyond it the folded wall itself is squeezed
+    (k_st = cup.stop_stiffness, 0.35 N m/rad) beside the bellows' spring, both in series with the
+    lip: R rises at k_c = 1 / (1 / k_l + 1 / (k_b + k_st)) = 0.14 N m/rad, 5x the swing's 0.028.
 
     Derivation (contact frame, z = approach, arm r = c - o from the lip centre o to the centre of
     mass, force f). The in-plane moment tau = (r x f)_xy tips the lip about n = tau / |tau|. Tilting
-    the object by theta about n turns a fixed external force, seen from the object, by -theta
-    about n (Rodrigues: f cos theta - (n x f) sin theta + n (n.f)(1 - cos theta)); its moment about
-    n becomes A cos theta - B sin theta with A = |tau| and B = r.f - (n.f)(n.r) (B > 0 for a
-    hanging load: the pendulum's restoring term). Equilibrium: A cos theta - B sin theta = k_b
-    theta, solved by bisection on [0, theta_max] (the left side minus k_b theta is A >= 0 at 0);
-    where it is still positive at theta_max the bellows rests on its stop at theta_max. Twisting
-    moments (about z) are not relieved: the bellows is stiff in torsion. Left out: the bellows'
-    own tilt from sealing on a face off the approach (its moment k_b alpha, and the range it
-    leaves). The swing's dynamics (a suddenly applied load overshoots the static tilt) are
-    `lip_load`'s.
+    the object by phi about n turns a fixed external force, seen from the object, by -phi
+    about n (Rodrigues: f cos phi - (n x f) sin phi + n (n.f)(1 - cos phi)); its moment about
+    n becomes A cos phi - B sin phi with A = |tau| and B = r.f - (n.f)(n.r) (B > 0 for a
+    hanging load: the pendulum's restoring term). Equilibrium: A cos phi - B sin phi = R(phi),
+    solved by bisection on [0, pi/2] (the left side less R is A >= 0 at 0 and falls with phi for
+    B >= 0). Twisting moments (about z) are not relieved: the bellows is stiff in torsion. Left
+    out: the bellows' own tilt from sealing on a face off the approach (its moment k_b alpha, and
+    the range it leaves). The swing's dynamics (a suddenly applied load overshoots the static
+    tilt) are `lip_load`'s.
     """
     force = np.asarray(force, dtype=float)
     if not cup.bellows_swing:
@@ -166,8 +174,8 @@ def bellows_swing(
 
 
 class _Swing:
-    """The bellows' swing as a one-axis pendulum (see `bellows_swing`): the load's moment about the
-    tilt axis n at tilt theta is A cos(theta) - B sin(theta), the bellows returns k_b theta."""
+    """The cup's swing as a one-axis pendulum (see `bellows_swing`): the load's moment about the
+    tilt axis n at the object's tilt phi is A cos(phi) - B sin(phi), the cup returns R(phi)."""
 
     def __init__(self, force: np.ndarray, com: np.ndarray, ring_centre: np.ndarray, frames: np.ndarray,
                  cup: CupConfig):
@@ -180,27 +188,47 @@ class _Swing:
         self.n[self.tips, :2] = tau[self.tips, :2] / self.a[self.tips, None]
         self.n_f = np.einsum("ni,ni->n", self.n, self.f)
         self.b = np.einsum("ni,ni->n", self.r, self.f) - self.n_f * np.einsum("ni,ni->n", self.n, self.r)
-        self.k, self.theta_max = cup.bending_stiffness, cup.approach_tolerance
+        self.k, self.k_lip, self.theta_max = cup.bending_stiffness, cup.lip_tilt_stiffness, cup.approach_tolerance
+        self.k_stop = cup.stop_stiffness
+        self.k_series = self.k * self.k_lip / (self.k + self.k_lip)
+        self.k_caught = 1.0 / (1.0 / self.k_lip + 1.0 / (self.k + self.k_stop))
+        self.phi_stop = self.theta_max * (1.0 + self.k / self.k_lip)
 
-    def moment(self, theta: np.ndarray) -> np.ndarray:
-        """The load's moment about n at tilt theta, less the bellows' return."""
-        return self.a * np.cos(theta) - self.b * np.sin(theta) - self.k * theta
+    def returned(self, phi: np.ndarray) -> np.ndarray:
+        """The cup's return R(phi): bellows and lip in series up to the stop; beyond it the stop
+        (k_st) joins the bellows: R = k_c (phi - theta_max k_st / (k_b + k_st)), k_c the lip in
+        series with k_b + k_st (continuous at phi_stop, where R = k_b theta_max)."""
+        return np.where(phi <= self.phi_stop, self.k_series * phi,
+                        self.k_caught * (phi - self.theta_max * self.k_stop / (self.k + self.k_stop)))
 
-    def work(self, theta: np.ndarray) -> np.ndarray:
-        """Work done by the load from rest at 0 to theta, less the bellows' stored energy: the
-        swing's kinetic energy at theta when the load is applied at once."""
-        return self.a * np.sin(theta) + self.b * (np.cos(theta) - 1.0) - 0.5 * self.k * theta * theta
+    def stored(self, phi: np.ndarray) -> np.ndarray:
+        """Energy the cup stores at tilt phi (the integral of R): the bellows', the stop's and the
+        lip's, each carrying R (the lip tilts by R / k_l, the bellows by the rest)."""
+        lip = self.returned(phi) / self.k_lip
+        bellows = phi - lip
+        squeezed = np.maximum(bellows - self.theta_max, 0.0)
+        return 0.5 * (self.k * bellows * bellows + self.k_stop * squeezed * squeezed + self.k_lip * lip * lip)
 
-    def turned(self, theta: np.ndarray) -> np.ndarray:
-        """The load seen from the object tilted by theta about n (contact frame)."""
-        c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
+    def moment(self, phi: np.ndarray) -> np.ndarray:
+        """The load's moment about n at tilt phi, less the cup's return."""
+        return self.a * np.cos(phi) - self.b * np.sin(phi) - self.returned(phi)
+
+    def work(self, phi: np.ndarray) -> np.ndarray:
+        """Work done by the load from rest at 0 to phi, less the cup's stored energy: the swing's
+        kinetic energy at phi when the load is applied at once."""
+        return self.a * np.sin(phi) + self.b * (np.cos(phi) - 1.0) - self.stored(phi)
+
+    def turned(self, phi: np.ndarray) -> np.ndarray:
+        """The load seen from the object tilted by phi about n (contact frame)."""
+        c, s = np.cos(phi)[:, None], np.sin(phi)[:, None]
         return self.f * c - np.cross(self.n, self.f) * s + self.n * self.n_f[:, None] * (1.0 - c)
 
     def static_tilt(self) -> np.ndarray:
-        """Equilibrium tilt: moment(theta) = 0 on [0, theta_max], or theta_max on the stop."""
-        theta = _bisect(self.moment, np.zeros_like(self.a), np.full_like(self.a, self.theta_max))
-        theta = np.where(self.moment(np.full_like(self.a, self.theta_max)) > 0.0, self.theta_max, theta)
-        return np.where(self.tips, theta, 0.0)
+        """Equilibrium tilt: moment(phi) = 0 on [0, SWING_CAP] (SWING_CAP if none)."""
+        cap = np.full_like(self.a, SWING_CAP)
+        phi = _bisect(self.moment, np.zeros_like(self.a), cap)
+        phi = np.where(self.moment(cap) > 0.0, cap, phi)
+        return np.where(self.tips, phi, 0.0)
 
 
 def _bisect(fn, low: np.ndarray, high: np.ndarray) -> np.ndarray:
@@ -227,51 +255,48 @@ def lip_load(
     objects above 0.15 kg). Whatever the load's history, as long as it grows from zero without
     reversing, an undamped spring-mass system swings furthest when the whole load comes at once
     (the step is the bound; a dynamic amplification of 2 for a linear spring); the labeller does
-    not know the motion's timing, so it takes the bound. From rest at theta = 0 the swing turns
-    where the load's work equals the bellows' energy (energy conservation, `_Swing.work`):
+    not know the motion's timing, so it takes the bound. From rest at phi = 0 the swing turns
+    where the load's work equals the cup's stored energy (energy conservation, `_Swing.work`):
 
-        A sin(theta_u) + B (cos(theta_u) - 1) = k_b theta_u^2 / 2,
+        A sin(phi_u) + B (cos(phi_u) - 1) = int_0^phi_u R,
 
-    the first root beyond the equilibrium theta_s (small angles: theta_u = 2 theta_s). The silicone's
-    loss leaves a share D = exp(-pi zeta / sqrt(1 - zeta^2)) of the overshoot, zeta = eta / 2
-    (`CupConfig.swing_overshoot_fraction`): theta_p = theta_s + D (theta_u - theta_s). At theta_p the
-    object is momentarily at rest, so the lip carries the bellows' return k_b theta_p about n, and
-    what turns the object back: Newton about the lip centre, I alpha = M_n - k_b theta_p with
+    the first root beyond the equilibrium phi_s (small angles, below the stop: phi_u = 2 phi_s).
+    The silicone's loss leaves a share D = exp(-pi zeta / sqrt(1 - zeta^2)) of the overshoot,
+    zeta = eta / 2 (`CupConfig.swing_overshoot_fraction`): phi_p = phi_s + D (phi_u - phi_s). At
+    phi_p the object is momentarily at rest, so the lip carries the cup's return R(phi_p) about n,
+    and what turns the object back: Newton about the lip centre, I alpha = M_n - R(phi_p) with
     I >= m |n x r|^2 (all the mass at the centre of mass: the largest angular acceleration any
     mass distribution can have). For that point mass the centre of mass accelerates by alpha (n x r)
     and its angular momentum changes by m alpha r x (n x r), so the lip carries (Newton and Euler,
     the mass at rest)
 
-        force:  f(theta_p) - m alpha (n x r)
-        moment: r x f(theta_p) - m alpha r x (n x r),   m alpha = (M_n - k_b theta_p) / |n x r|^2,
+        force:  f(phi_p) - m alpha (n x r)
+        moment: r x f(phi_p) - m alpha r x (n x r),   m alpha = (M_n - R(phi_p)) / |n x r|^2,
 
-    M_n = A cos(theta_p) - B sin(theta_p); the moment's part along n is k_b theta_p. At theta_s
-    both reduce to the static swing.
+    M_n = A cos(phi_p) - B sin(phi_p); the moment's part along n is R(phi_p). At phi_s both reduce
+    to the static swing.
 
-    The stop. A swing that would turn beyond theta_max (one side of the wall at full stroke) is
-    caught by the bellows' own wall, folded flat: soft and lossy silicone, not a rigid stop. The
-    lip is taken at theta_max carrying at least what the bent bellows returns there, the formula
-    above at theta_max (the stop's own share during the catch is left out: unknown, and a rigid
-    stop would peel every swing that reaches it, while the simulated bellows, whose stop is a
-    damped constraint, holds objects that swing onto it). An object whose equilibrium lies beyond
-    the stop rests on it and the lip carries the load's whole moment there, as in `bellows_swing`.
+    The stop's catch. A swing that reaches the bellows' stop with speed left is caught by the lip
+    and the lip (`bellows_swing`: R rises at 0.14 N m/rad instead of the swing's 0.028): the
+    energy it still carries there goes into the squeezed wall and the lip, whose moment rises
+    steeply, and a fast swing peels it. A box_shoe held 26 mm off its centre of mass swings onto the stop with ~5 mJ and,
+    caught, needs ~50 mN m of its lip (the ring holds ~25); the simulated lip opened ~9 deg beyond
+    the stopped bellows and peeled. A slow arrival (a few tenths of a mJ) is caught within the
+    ring's limit.
     """
     force = np.asarray(force, dtype=float)
     if not cup.bellows_swing:
         return external_wrench_at_contact(force, com, ring_centre, frames)
     swing = _Swing(force, com, ring_centre, frames, cup)
-    theta_p = swing.static_tilt()  # the static swing: the formula below with nothing unbalanced
+    phi_p = swing.static_tilt()  # the static swing: the formula below with nothing unbalanced
     if cup.swing_overshoot:
-        theta_s, share = theta_p, cup.swing_overshoot_fraction
-        # The turning point lies beyond the stop iff the swing still moves where it would reach it.
-        reach = theta_s + (swing.theta_max - theta_s) / max(share, 1e-12)
-        on_stop = (theta_s >= swing.theta_max) | (swing.work(reach) > 0.0)
-        theta_u = _bisect(swing.work, theta_s, reach)
-        theta_p = np.where(on_stop, swing.theta_max, theta_s + share * (theta_u - theta_s))
-        theta_p = np.where(swing.tips, theta_p, 0.0)
-    f = swing.turned(theta_p)
+        phi_s, share = phi_p, cup.swing_overshoot_fraction
+        cap = np.full_like(phi_s, SWING_CAP)
+        phi_u = np.where(swing.work(cap) > 0.0, cap, _bisect(swing.work, phi_s, cap))
+        phi_p = np.where(swing.tips, phi_s + share * (phi_u - phi_s), 0.0)
+    f = swing.turned(phi_p)
     torque = np.cross(swing.r, f)
-    unbalanced = np.where(swing.tips, np.minimum(swing.moment(theta_p), 0.0), 0.0)
+    unbalanced = np.where(swing.tips, np.minimum(swing.moment(phi_p), 0.0), 0.0)
     arm = np.cross(swing.n, swing.r)
     arm2 = np.einsum("ni,ni->n", arm, arm)
     spin = np.where(arm2 > 1e-12, unbalanced / np.maximum(arm2, 1e-12), 0.0)[:, None]  # m alpha

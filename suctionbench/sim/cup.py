@@ -112,6 +112,11 @@ class SimCupConfig:
     turned a swinging object's speed into moment on the lip (0.019 N m at 107 deg/s, as much as
     its whole ring limit) and peeled it in the lift."""
 
+    stop_travel: float = 0.23
+    """How far (rad) the bellows tilts beyond its stop before the hinges' hard limit: the squeezed
+    wall's stack (3 mm, `CupConfig.stop_stiffness`) crushed by half at its mean radius 6.5 mm,
+    atan(1.5 / 6.5). Up to it the stop is the controller's spring."""
+
     tilt_armature: float = 1e-5
     """Armature (kg m^2) of the bellows' tilt hinges. MuJoCo's limit stiffness scales with the dof's
     inertia; the bellows' own (~1e-6 kg m^2) lets a lip pressed with ~6 N tilt 1.5 deg past the
@@ -207,6 +212,11 @@ class SimCupConfig:
             return self.tilt_damping
         return cup.bellows_loss_factor * cup.bending_stiffness / self.swing_frequency
 
+    def stop_damping_for(self, cup: CupConfig) -> float:
+        """Damping (N m s/rad) of the bellows' stop spring: the silicone's loss as for the tilt,
+        eta k_st / swing_frequency (an upper estimate: the catch rings faster than the swing)."""
+        return cup.bellows_loss_factor * cup.stop_stiffness / self.swing_frequency
+
     def lip_point_stiffness(self, cup: CupConfig) -> float:
         """Fold stiffness (N/m) of one lip point: the ring's rate `cup.lip_rate`
         (V / (lip_fold_fraction x lip_travel)) shared by the points."""
@@ -230,6 +240,8 @@ class CupHandles:
     bellow_body: str
     cup: CupConfig
     sim: SimCupConfig
+    tilt_joints: tuple[str, ...] = ()
+    """The bellows' two tilt hinges whose stop spring the controller applies (compliant cup)."""
 
     @property
     def actuator(self) -> str:
@@ -270,10 +282,14 @@ def add_suction_tool(
         stiffness=cup.axial_stiffness, damping=sim.axial_damping, range=[-cup.stroke, 0.0],
         limited=True, armature=1e-4, solref_limit=list(sim.contact_solref),
     )
+    # The compliant cup's stop is a spring the controller applies beyond max_tilt (the folded wall
+    # squeezed, `CupConfig.stop_stiffness`); the hinges' hard limit lies where the wall is crushed.
+    hard_tilt = max_tilt + (sim.stop_travel * (180.0 / math.pi if spec.compiler.degree else 1.0)
+                            if sim.compliant else 0.0)
     for axis, label in (([1, 0, 0], "tilt_x"), ([0, 1, 0], "tilt_y")):
         bellow.add_joint(
             name=f"{prefix}_{label}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=axis, pos=[0, 0, cup.height],
-            stiffness=cup.bending_stiffness, damping=sim.tilt_damping_for(cup), range=[-max_tilt, max_tilt],
+            stiffness=cup.bending_stiffness, damping=sim.tilt_damping_for(cup), range=[-hard_tilt, hard_tilt],
             limited=True, armature=sim.tilt_armature, solref_limit=list(sim.contact_solref),
         )
     shell_len = (1.0 - sim.shell_height_fraction) * cup.height
@@ -364,6 +380,7 @@ def add_suction_tool(
         tip_site=f"{prefix}_tip", tool_body=f"{prefix}_tool",
         actuators=(f"{prefix}_vacuum", f"{prefix}_vacuum_bellows"), slide_joint=f"{prefix}_compress",
         lip_geoms=tuple(names), lip_joints=tuple(joints), bellow_body=f"{prefix}_bellow", cup=cup, sim=sim,
+        tilt_joints=(f"{prefix}_tilt_x", f"{prefix}_tilt_y"),
     )
 
 
@@ -401,6 +418,10 @@ class SuctionController:
         self.slide_qpos = model.jnt_qposadr[model.joint(handles.slide_joint).id]
         self.lip_qpos = np.array([model.jnt_qposadr[model.joint(j).id] for j in handles.lip_joints], dtype=int)
         self.bellow = model.body(handles.bellow_body).id
+        self._tilt_qpos = np.array([model.jnt_qposadr[model.joint(j).id] for j in handles.tilt_joints], dtype=int)
+        self._tilt_dof = np.array([model.jnt_dofadr[model.joint(j).id] for j in handles.tilt_joints], dtype=int)
+        self._stop_at = self.cup.approach_tolerance
+        self._stop_rate, self._stop_damping = self.cup.stop_stiffness, self.sim.stop_damping_for(self.cup)
         self.commanded = False
         self.sealed = -1
         self.candidate = -1
@@ -460,9 +481,11 @@ class SuctionController:
 
     # -- the seal ---------------------------------------------------------------------------------
     def update(self, data: mujoco.MjData) -> int:
-        """Drive the vacuum for this step; returns the body sealed by vacuum (-1 if none)."""
+        """Drive the vacuum (and the bellows' stop spring) for this step; returns the body sealed
+        by vacuum (-1 if none)."""
         if not self.sim.compliant:
             return self._update_rigid(data)
+        self.apply_stop(data)
         if not self.commanded:
             data.ctrl[self.actuators] = 0.0
             self.sealed, self.candidate, self._next_test = -1, -1, -math.inf
@@ -475,6 +498,19 @@ class SuctionController:
         sealed = self.candidate >= 0 and data.act[self._act] >= self._switch
         self.sealed = self.candidate if sealed else -1
         return self.sealed
+
+    def apply_stop(self, data: mujoco.MjData) -> None:
+        """The bellows' stop as a spring (`CupConfig.stop_stiffness`, damped by the silicone's
+        loss) on the tilt beyond `approach_tolerance`, round in every azimuth (the tilt vector of
+        the two hinges): set as the hinges' applied force, zero inside the stop."""
+        tilt = data.qpos[self._tilt_qpos]
+        size = math.hypot(tilt[0], tilt[1])
+        if size <= self._stop_at:
+            data.qfrc_applied[self._tilt_dof] = 0.0
+            return
+        axis = tilt / size
+        speed = float(data.qvel[self._tilt_dof] @ axis)
+        data.qfrc_applied[self._tilt_dof] = -(self._stop_rate * (size - self._stop_at) + self._stop_damping * speed) * axis
 
     def leak_test(self, data: mujoco.MjData) -> float:
         """Measure the leak under the lip: sets `candidate` (the object body most lip points touch)

@@ -11,9 +11,9 @@ import dataclasses
 import math
 
 import numpy as np
-from scipy.optimize import brentq
 import pytest
 from conftest import box
+from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
 from suctionbench.config import STANDARD_GRAVITY, LabelConfig, PerturbationConfig
@@ -70,7 +70,8 @@ def test_side_grasp_needs_friction_against_gravity(cup):
     # The cup bends instead (bellows k_b and lip ring k_l = K r^2 / 2 in series): it cannot hold
     # m g d (27 mN m at 0.14 kg) at any tilt below its stop (it returns at most k_b t_max =
     # 12.1 mN m there), so a cube above ~0.07 kg droops past it, where the squeezed wall (k_st)
-    # joins the bellows, in series with the lip: R(t) = k_c (t - t_max k_st / (k_b + k_st)), k_c = 1 / (1 / k_l + 1 / (k_b + k_st)).
+    # joins the bellows, in series with the lip: R(t) = k_c (t - t_max k_st / (k_b + k_st)),
+    # k_c = 1 / (1 / k_l + 1 / (k_b + k_st)).
     # Turned by t the weight has the moment m g d cos t about the lip, a pull m g sin t along the
     # approach and a shear m g cos t. Resting (the load applied slowly, swing_overshoot off) at
     # m g d cos t = R(t), the ring holds iff R(t) <= r (V - m g sin t) / 2: the heaviest cube is

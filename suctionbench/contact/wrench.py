@@ -276,12 +276,12 @@ def lip_load(
     M_n = A cos(phi_p) - B sin(phi_p); the moment's part along n is R(phi_p). At phi_s both reduce
     to the static swing.
 
-    The stop's catch. A swing that reaches the bellows' stop with speed left is caught by the lip
-    and the lip (`bellows_swing`: R rises at 0.14 N m/rad instead of the swing's 0.028): the
+    The stop's catch. A swing that reaches the bellows' stop with speed left is caught by the
+    squeezed wall and the lip (`bellows_swing`: R rises at 0.14 N m/rad instead of the swing's 0.028): the
     energy it still carries there goes into the squeezed wall and the lip, whose moment rises
-    steeply, and a fast swing peels it. A box_shoe held 26 mm off its centre of mass swings onto the stop with ~5 mJ and,
-    caught, needs ~50 mN m of its lip (the ring holds ~25); the simulated lip opened ~9 deg beyond
-    the stopped bellows and peeled. A slow arrival (a few tenths of a mJ) is caught within the
+    steeply, and a fast swing peels it. A box_shoe held 26 mm off its centre of mass reaches the
+    stop with ~7 mJ and, caught, needs ~36 mN m of its lip (the ring holds ~24); the simulated lip
+    opened ~9 deg beyond the stopped bellows and peeled. A slow arrival is caught within the
     ring's limit.
     """
     force = np.asarray(force, dtype=float)

@@ -510,7 +510,8 @@ class SuctionController:
             return
         axis = tilt / size
         speed = float(data.qvel[self._tilt_dof] @ axis)
-        data.qfrc_applied[self._tilt_dof] = -(self._stop_rate * (size - self._stop_at) + self._stop_damping * speed) * axis
+        moment = self._stop_rate * (size - self._stop_at) + self._stop_damping * speed
+        data.qfrc_applied[self._tilt_dof] = -moment * axis
 
     def leak_test(self, data: mujoco.MjData) -> float:
         """Measure the leak under the lip: sets `candidate` (the object body most lip points touch)

@@ -415,8 +415,9 @@ def test_bellows_swing_is_the_pendulum_equilibrium():
     # squeezing the wall (k_st) in series with the lip, until h (f_x cos t + f_z sin t) =
     # k_c (t - theta_max k_st / (k_b + k_st)), k_c = 1 / (1 / k_l + 1 / (k_b + k_st)); a cup rigid
     # in bending (the paper's) leaves the load untouched.
-    from suctionbench.contact.wrench import bellows_swing, external_wrench_at_contact
+    from suctionbench.contact.wrench import external_wrench_at_contact, lip_load
 
+    static = dataclasses.replace(CUP, swing_overshoot=False)  # the load applied slowly: the equilibrium
     frame = np.eye(3)[None]
     centre = np.zeros((1, 3))
     k_b, stop = CUP.bending_stiffness, CUP.approach_tolerance
@@ -425,18 +426,17 @@ def test_bellows_swing_is_the_pendulum_equilibrium():
     for m, h, a in ((0.3, 0.05, 3.1), (0.05, 0.02, 3.1), (0.4, 0.04, 1.0)):
         force = np.array([[m * a, 0.0, m * G]])
         com = np.array([[0.0, 0.0, h]])
-        swung = bellows_swing(force, com, centre, frame, CUP)
-        assert np.linalg.norm(swung) == pytest.approx(np.linalg.norm(force), rel=1e-12)
+        swung = lip_load(force, com, centre, frame, static)[0]  # (turned force, its moment)
+        assert np.linalg.norm(swung[:3]) == pytest.approx(np.linalg.norm(force), rel=1e-12)
         tilt = brentq(lambda t, m=m, h=h, a=a: m * h * (a * math.cos(t) - G * math.sin(t)) - k_s * t, 0.0, stop)
-        moment = external_wrench_at_contact(swung, com, centre, frame)[0, 3:]
+        moment = swung[3:]
         assert np.linalg.norm(moment) == pytest.approx(k_s * tilt, rel=1e-6)
         assert np.linalg.norm(moment) < m * a * h
-        rigid = bellows_swing(force, com, centre, frame, dataclasses.replace(CUP, bellows_swing=False))
-        np.testing.assert_array_equal(rigid, force)
+        rigid = lip_load(force, com, centre, frame, dataclasses.replace(CUP, bellows_swing=False))
+        np.testing.assert_array_equal(rigid, external_wrench_at_contact(force, com, centre, frame))
     # inverted: 0.2 kg, 3 cm above the lip, nudged sideways by 0.1 N: m g h = 59 mN m per rad > k_s
     force, com = np.array([[0.1, 0.0, 0.2 * G]]), np.array([[0.0, 0.0, -0.03]])
-    swung = bellows_swing(force, com, centre, frame, CUP)
-    moment = np.linalg.norm(external_wrench_at_contact(swung, com, centre, frame)[0, 3:])
+    moment = np.linalg.norm(lip_load(force, com, centre, frame, static)[0, 3:])
     k_st = CUP.stop_stiffness
     k_c = 1.0 / (1.0 / k_lip + 1.0 / (k_b + k_st))
     caught = stop * k_st / (k_b + k_st)

@@ -203,7 +203,7 @@ def test_unknown_arch_is_input_error():
         build_model("resnet")
     with pytest.raises(InputError, match="arch"):
         TrainConfig(arch="resnet")
-    with pytest.raises(InputError, match="arch"):  # built, but no dataset stores its context thumbnail yet
+    with pytest.raises(InputError, match="arch"):  # built, but training feeds one image channel yet
         TrainConfig(arch="context")
 
 

@@ -79,16 +79,9 @@ def test_the_cup_lands_on_the_planned_grasp():
     pose = runner.object_pose()
     grasp = np.asarray(top_grasp(record), float)
     point, approach = pose[:3, :3] @ grasp[:3] + pose[:3, 3], pose[:3, :3] @ grasp[3:]
-    offsets = []
-
-    def record_contact(data, cup):
-        if not offsets and cup.candidate >= 0:
-            offsets.append(cup.axis_offset(data, point))
-
-    runner.episode.recorder, runner.episode.record_every = record_contact, 1
-    result = runner.episode.execute(point, approach)
+    offset, result = runner.episode.execute_measuring_landing(point, approach)
     assert result.success, result
-    assert offsets and offsets[0] < 0.5e-3, offsets
+    assert offset is not None and offset < 0.5e-3, offset
 
 
 def test_a_dropped_object_is_at_rest_when_the_grasp_is_chosen():

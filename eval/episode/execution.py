@@ -23,23 +23,6 @@ from suctionbench.objects.registry import list_objects
 from suctionbench.sim.pick import PickRequest, PickRunner
 
 
-def landing_offset(episode, point: np.ndarray, approach: np.ndarray) -> tuple[float | None, object]:
-    """Run the pick at (point, approach); return the bellows axis' distance (m) from `point` at the
-    first step the leak test finds an object under the lip (None if it never touched), and the
-    episode's result."""
-    seen: list[float] = []
-
-    def record(data, cup) -> None:
-        if not seen and cup.candidate >= 0:
-            seen.append(cup.axis_offset(data, point))
-
-    every = episode.record_every
-    episode.recorder, episode.record_every = record, 1
-    result = episode.execute(point, approach)
-    episode.recorder, episode.record_every = None, every
-    return (seen[0] if seen else None), result
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=2)
@@ -60,7 +43,7 @@ def main() -> None:
                 hits, _, _ = mesh.ray.intersects_location([com + [0.0, 0.0, 1.0]], [[0.0, 0.0, -1.0]])
                 if len(hits):
                     top, down = hits[np.argmax(hits[:, 2])], np.array([0.0, 0.0, -1.0])
-                    offset, result = landing_offset(episode, top, down)
+                    offset, result = episode.execute_measuring_landing(top, down)
                     row.update({"landing_offset_mm": None if offset is None else round(offset * 1e3, 3),
                                 "failure": result.failure, "peak_acceleration": result.peak_acceleration})
             rows.append(row)

@@ -129,14 +129,15 @@ SWING_BISECTIONS = 36
 
 SWING_CAP = 0.5 * math.pi
 """Largest tilt (rad) the swing is solved over: far beyond where any lip peels (the lip's tilt
-past the stop reaches its peel limit at ~0.13 rad for the default cup)."""
+past the stop reaches the ring's limit within (r V / 2 - k_b theta_max) / k_c = 0.13 rad for the
+default cup)."""
 
 
-def bellows_swing(
-    force: np.ndarray, com: np.ndarray, ring_centre: np.ndarray, frames: np.ndarray, cup: CupConfig
-) -> np.ndarray:
-    """The load (N, 3) (object frame) as the lifted object feels it once the cup has bent to
-    equilibrium: the same force, rotated with the object about the lip centre.
+class _Swing:
+    """The cup's swing as a one-axis pendulum: the load's moment about the tilt axis n at the
+    object's tilt phi is A cos(phi) - B sin(phi), the cup returns R(phi). At the static
+    equilibrium (`static_tilt`) the object feels the same force, turned with it about the lip
+    centre (`turned`); `lip_load` judges the lip there or at the swing's first turning point.
 
     Why. A bellows is soft in bending (k_b = cup.bending_stiffness, 0.032 N m/rad by default), so a
     load whose moment tips the lip does not hold the object rigidly: the object and the lip swing
@@ -146,7 +147,7 @@ def bellows_swing(
     lip) on a lip that holds r (V - m g) / 2 = 16 mN m; swung it hangs along g - a and the lip
     carries ~8 mN m.
 
-    The cup's return R(phi) at the object's tilt phi (`_Swing.returned`): the bellows (k_b) and the
+    The cup's return R(phi) at the object's tilt phi (`returned`): the bellows (k_b) and the
     lip ring (k_l = cup.lip_tilt_stiffness, 0.22 N m/rad: its springs, which the ring-pressure
     limit already assumes elastic) in series, k_s = k_b k_l / (k_b + k_l), until the bellows
     reaches its tilt stop theta_max = cup.approach_tolerance (one side of the wall at full stroke)
@@ -166,16 +167,6 @@ def bellows_swing(
     the range it leaves). The swing's dynamics (a suddenly applied load overshoots the static
     tilt) are `lip_load`'s.
     """
-    force = np.asarray(force, dtype=float)
-    if not cup.bellows_swing:
-        return force
-    swing = _Swing(force, com, ring_centre, frames, cup)
-    return np.einsum("nij,nj->ni", frames, swing.turned(swing.static_tilt()))
-
-
-class _Swing:
-    """The cup's swing as a one-axis pendulum (see `bellows_swing`): the load's moment about the
-    tilt axis n at the object's tilt phi is A cos(phi) - B sin(phi), the cup returns R(phi)."""
 
     def __init__(self, force: np.ndarray, com: np.ndarray, ring_centre: np.ndarray, frames: np.ndarray,
                  cup: CupConfig):
@@ -247,7 +238,7 @@ def lip_load(
     as `resists` takes it) for a load `force` (N, 3) at `com`.
 
     A cup rigid in bending (`cup.bellows_swing` off) carries the load as it is; with
-    `cup.swing_overshoot` off the lip carries the swing's static equilibrium (`bellows_swing`).
+    `cup.swing_overshoot` off the lip carries the swing's static equilibrium (`_Swing`).
 
     The swing's first turning point (default). The load does not arrive slowly: it meets the lip
     as the object tips off the table (a brick's tilt built up over ~0.2 s in the simulation) and as
@@ -277,9 +268,9 @@ def lip_load(
     to the static swing.
 
     The stop's catch. A swing that reaches the bellows' stop with speed left is caught by the
-    squeezed wall and the lip (`bellows_swing`: R rises at 0.14 N m/rad instead of the swing's 0.028): the
-    energy it still carries there goes into the squeezed wall and the lip, whose moment rises
-    steeply, and a fast swing peels it. A box_shoe held 26 mm off its centre of mass reaches the
+    squeezed wall and the lip (`_Swing`: R rises at 0.14 N m/rad instead of the swing's 0.028):
+    the energy it still carries there goes into them, the lip's moment rises steeply, and a fast
+    swing peels it. A box_shoe held 26 mm off its centre of mass reaches the
     stop with ~7 mJ and, caught, needs ~36 mN m of its lip (the ring holds ~24); the simulated lip
     opened ~9 deg beyond the stopped bellows and peeled. A slow arrival is caught within the
     ring's limit.

@@ -164,28 +164,32 @@ class GQCNN(nn.Module):
         return self.merge(torch.cat([*features, self.pose_stream(poses)], dim=1))
 
 
+def _compact_layout(width: int, **extra) -> dict:
+    """compact's layer layout with `width` filters per conv layer and fc widths scaled alike."""
+    scale = width // 16
+    convs = [("conv1", width, 5, False, True), ("conv2", width, 3, False, False), ("conv3", width, 3, False, True)]
+    return {"convs": convs,
+            "padding": "valid", "image_fc": 64 * scale, "pose_fc": 16 * scale, "merge_fc": 64 * scale, **extra}
+
+
 _SPECS: dict[str, dict] = {
     # (name, out_channels, kernel, LRN after ReLU, 2x2 max-pool at the end) per conv layer
     "dn3": {"convs": [("conv1_1", 64, 7, False, False), ("conv1_2", 64, 5, True, True),
                       ("conv2_1", 64, 3, False, False), ("conv2_2", 64, 3, True, True)],
             "padding": "same", "image_fc": 1024, "pose_fc": 128, "merge_fc": 1024},
-    "compact": {"convs": [("conv1", 16, 5, False, True), ("conv2", 16, 3, False, False), ("conv3", 16, 3, False, True)],
-                "padding": "valid", "image_fc": 64, "pose_fc": 16, "merge_fc": 64},
+    "compact": _compact_layout(16),
     # compact's layout twice: the grasp thumbnail and the context thumbnail (module doc, "context")
-    "context": {"convs": [("conv1", 16, 5, False, True), ("conv2", 16, 3, False, False), ("conv3", 16, 3, False, True)],
-                "padding": "valid", "image_fc": 64, "pose_fc": 16, "merge_fc": 64, "context": True},
+    "context": _compact_layout(16, context=True),
     # the same with twice the filters and fc widths: the capacity step of the size sweep
-    "context-wide": {"convs": [("conv1", 32, 5, False, True), ("conv2", 32, 3, False, False),
-                               ("conv3", 32, 3, False, True)],
-                     "padding": "valid", "image_fc": 128, "pose_fc": 32, "merge_fc": 128, "context": True},
+    "context-wide": _compact_layout(32, context=True),
 }
 
 ARCHITECTURES = tuple(_SPECS)
 """Names `build_model` accepts."""
 
 TRAINABLE_ARCHITECTURES = tuple(name for name, spec in _SPECS.items() if not spec.get("context"))
-"""Names `train` accepts: the context nets need datasets that store the context thumbnail beside
-the grasp thumbnail, which `generate` does not write yet."""
+"""Names `train` accepts: datasets store the context thumbnail (`context_ims_tf_table`), but the
+training pipeline (learning/data.py: batches, normalisation, augmentation) feeds one channel yet."""
 
 
 def init_weights(model: nn.Module, generator: torch.Generator | None = None) -> None:

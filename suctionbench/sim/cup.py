@@ -206,16 +206,19 @@ class SimCupConfig:
         """The rigid reference cup: 8 spheres on one rigid ring, no leak test (speed reference)."""
         return cls(compliant=False, lip_points=8)
 
+    def silicone_damping(self, cup: CupConfig, stiffness: float) -> float:
+        """Viscous damping (N m s/rad) equivalent to the silicone's loss on a spring of `stiffness`
+        swinging at swing_frequency: eta k / omega (eta = cup.bellows_loss_factor)."""
+        return cup.bellows_loss_factor * stiffness / self.swing_frequency
+
     def tilt_damping_for(self, cup: CupConfig) -> float:
         """The tilt hinges' damping for `cup` (see tilt_damping)."""
-        if self.tilt_damping is not None:
-            return self.tilt_damping
-        return cup.bellows_loss_factor * cup.bending_stiffness / self.swing_frequency
+        return self.tilt_damping if self.tilt_damping is not None else self.silicone_damping(cup, cup.bending_stiffness)
 
     def stop_damping_for(self, cup: CupConfig) -> float:
-        """Damping (N m s/rad) of the bellows' stop spring: the silicone's loss as for the tilt,
-        eta k_st / swing_frequency (an upper estimate: the catch rings faster than the swing)."""
-        return cup.bellows_loss_factor * cup.stop_stiffness / self.swing_frequency
+        """Damping of the bellows' stop spring: the silicone's loss on `cup.stop_stiffness` (an upper
+        estimate at the swing's frequency: the catch rings faster)."""
+        return self.silicone_damping(cup, cup.stop_stiffness)
 
     def lip_point_stiffness(self, cup: CupConfig) -> float:
         """Fold stiffness (N/m) of one lip point: the ring's rate `cup.lip_rate`
@@ -273,23 +276,21 @@ def add_suction_tool(
     )
     bellow = tool.add_body(name=f"{prefix}_bellow", pos=[0, 0, shaft_len])
     # Bellows: the axial spring over the stroke, and the tilt about the lip centre. One side of the
-    # wall can compress by at most the stroke while the other is uncompressed: the lip plane tilts
-    # by at most atan(stroke / 2r) (21.8 deg for the default cup).
-    max_tilt = math.atan2(cup.stroke, 2.0 * cup.radius)
-    max_tilt *= 180.0 / math.pi if spec.compiler.degree else 1.0  # hinge ranges are in the spec's unit
+    # wall can compress by at most the stroke while the other is uncompressed: the lip plane reaches
+    # its stop at cup.approach_tolerance = atan(stroke / 2r) (21.8 deg for the default cup). The
+    # compliant cup's stop is a spring the controller applies beyond it (the folded wall squeezed,
+    # `CupConfig.stop_stiffness`); the hinges' hard limit lies where the wall is crushed.
+    hinge_limit = cup.approach_tolerance + (sim.stop_travel if sim.compliant else 0.0)
+    hinge_limit *= 180.0 / math.pi if spec.compiler.degree else 1.0  # hinge ranges are in the spec's unit
     bellow.add_joint(
         name=f"{prefix}_compress", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1],
         stiffness=cup.axial_stiffness, damping=sim.axial_damping, range=[-cup.stroke, 0.0],
         limited=True, armature=1e-4, solref_limit=list(sim.contact_solref),
     )
-    # The compliant cup's stop is a spring the controller applies beyond max_tilt (the folded wall
-    # squeezed, `CupConfig.stop_stiffness`); the hinges' hard limit lies where the wall is crushed.
-    hard_tilt = max_tilt + (sim.stop_travel * (180.0 / math.pi if spec.compiler.degree else 1.0)
-                            if sim.compliant else 0.0)
     for axis, label in (([1, 0, 0], "tilt_x"), ([0, 1, 0], "tilt_y")):
         bellow.add_joint(
             name=f"{prefix}_{label}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=axis, pos=[0, 0, cup.height],
-            stiffness=cup.bending_stiffness, damping=sim.tilt_damping_for(cup), range=[-hard_tilt, hard_tilt],
+            stiffness=cup.bending_stiffness, damping=sim.tilt_damping_for(cup), range=[-hinge_limit, hinge_limit],
             limited=True, armature=sim.tilt_armature, solref_limit=list(sim.contact_solref),
         )
     shell_len = (1.0 - sim.shell_height_fraction) * cup.height

@@ -495,6 +495,24 @@ class PickEpisode:
             peak_acceleration=self._peak_accelerations(),
         )
 
+    def execute_measuring_landing(self, point: np.ndarray, approach: np.ndarray) -> tuple[float | None, EpisodeResult]:
+        """`execute`, also returning the landing offset: the bellows axis' distance (m) from `point`
+        at the first step the leak test finds an object under the lip (the arm's tracking error
+        across the approach; None if the lip never touched). The recorder is borrowed meanwhile."""
+        seen: list[float] = []
+
+        def record(data: mujoco.MjData, cup: Any) -> None:
+            if not seen and cup.candidate >= 0:
+                seen.append(cup.axis_offset(data, point))
+
+        saved = self.recorder, self.record_every
+        self.recorder, self.record_every = record, 1
+        try:
+            result = self.execute(point, approach)
+        finally:
+            self.recorder, self.record_every = saved
+        return (seen[0] if seen else None), result
+
     # -- observations of the state ----------------------------------------------------------------
     def _object_in_tip_frame(self) -> np.ndarray:
         """Object COM position in the tool-tip frame (for slip measurement)."""

@@ -287,5 +287,10 @@ class _Unbatched:
     def __init__(self, model: Any):
         self.model = model
 
+    @property
+    def image_channels(self) -> int:
+        """The wrapped model's (the policy cuts the context thumbnail for a two-channel model)."""
+        return int(getattr(self.model, "image_channels", 1))
+
     def predict(self, images: np.ndarray, poses: np.ndarray) -> np.ndarray:
         return np.concatenate([self.model.predict(images[i : i + 1], poses[i : i + 1]) for i in range(len(images))])

@@ -1,13 +1,15 @@
 """GQ-CNN learning: architectures, streaming data, augmentation geometry, training, checkpoints, CLI.
 
 Everything runs on a tiny synthetic dataset (256 thumbnails: positives are a flat disc at the
-grasp, negatives a ridge through it) with the compact net, so the module takes seconds.
+grasp, negatives a ridge through it; context thumbnails a shallower, wider view of the same shape)
+with the compact and context nets, so the module takes seconds.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import shutil
 
 import numpy as np
 import pytest
@@ -15,11 +17,12 @@ import torch
 from typer.testing import CliRunner
 
 from suctionbench.cli import app
-from suctionbench.dataset.storage import DatasetWriter, read_split, write_splits
+from suctionbench.dataset.storage import DatasetReader, DatasetWriter, read_split, shard_file_name, write_splits
 from suctionbench.errors import InputError
 from suctionbench.learning.checkpoint import CARD_NAME, STATE_NAME, WEIGHTS_NAME, GQCNNModel, load_model, save_model
 from suctionbench.learning.data import (
     AUGMENT_OFF,
+    CONTEXT_FIELD,
     AugmentConfig,
     NormStats,
     SplitData,
@@ -38,7 +41,9 @@ from suctionbench.learning.models import (
     tf_lrn_to_torch,
 )
 from suctionbench.learning.train import TrainConfig, train
-from suctionbench.sensing.thumbnails import extract_thumbnails
+from suctionbench.resources import asset_path
+from suctionbench.sensing.noise import DepthNoiseConfig
+from suctionbench.sensing.thumbnails import ThumbnailConfig, extract_context_thumbnails, extract_thumbnails
 
 N_SYNTH = 256
 """Datapoints of the synthetic dataset (4 shards of 64)."""
@@ -82,16 +87,27 @@ def synthetic_thumbnails(n: int, rng: np.random.Generator) -> tuple[np.ndarray, 
     return images, poses, metric
 
 
+def synthetic_context(images: np.ndarray) -> np.ndarray:
+    """Context thumbnails for `synthetic_thumbnails`: the middle of the same shape at half the size (2 x 2
+    block means) in a wider view of the 0.6 m table."""
+    n = len(images)
+    small = images.reshape(n, 32 // 2, 2, 32 // 2, 2).mean(axis=(2, 4))  # 16 x 16, then cut to the middle 10
+    context = np.full((n, 32, 32), 0.6, np.float32)
+    context[:, 11:21, 11:21] = small[:, 3:13, 3:13]
+    return context
+
+
 def write_synthetic(directory, n: int = N_SYNTH, per_shard: int = 64, seed: int = 0) -> None:
     rng = np.random.default_rng(seed)
     images, poses, metric = synthetic_thumbnails(n, rng)
+    context = synthetic_context(images)
     objects = (np.arange(n) // 32).astype(np.int32)
     writer = DatasetWriter(directory, per_shard)
     for start in range(0, n, per_shard):
         part = slice(start, start + per_shard)
         k = len(metric[part])
         writer.write_shard(start // per_shard, {
-            "depth_ims_tf_table": images[part, ..., None], "context_ims_tf_table": images[part, ..., None],
+            "depth_ims_tf_table": images[part, ..., None], "context_ims_tf_table": context[part, ..., None],
             "hand_poses": poses[part],
             "robust_suction_wrench_resistance": metric[part], "object_labels": objects[part],
             "pose_labels": np.zeros(k, np.int32), "image_labels": np.arange(start, start + k, dtype=np.int32),
@@ -113,9 +129,26 @@ def dataset(tmp_path_factory):
     return directory
 
 
-def train_arrays(dataset, kind: str = "image_wise") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def without_context(dataset, directory):
+    """A copy of `dataset` as written before datasets stored the context thumbnail: no context files,
+    manifests and card without the field."""
+    shutil.copytree(dataset, directory)
+    for manifest_path in sorted((directory / "tensors").glob("shard_*.json")):
+        manifest = json.loads(manifest_path.read_text())
+        name = shard_file_name(CONTEXT_FIELD, manifest["shard"])
+        del manifest["files"][name]
+        (directory / "tensors" / name).unlink()
+        manifest_path.write_text(json.dumps(manifest))
+    card = json.loads((directory / "config.json").read_text())
+    del card["fields"][CONTEXT_FIELD]
+    (directory / "config.json").write_text(json.dumps(card))
+    return directory
+
+
+def train_arrays(dataset, kind: str = "image_wise", image_channels: int = 1
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Images, network poses and metric of a split, read directly (the reference for the streaming reader)."""
-    data = SplitData(dataset, kind, "train")
+    data = SplitData(dataset, kind, "train", image_channels=image_channels)
     parts = [data.load_shard(s) for s in data.shards]
     return tuple(np.concatenate([getattr(p, name) for p in parts]) for name in ("images", "poses", "metric"))
 
@@ -203,8 +236,7 @@ def test_unknown_arch_is_input_error():
         build_model("resnet")
     with pytest.raises(InputError, match="arch"):
         TrainConfig(arch="resnet")
-    with pytest.raises(InputError, match="arch"):  # built, but training feeds one image channel yet
-        TrainConfig(arch="context")
+    assert TrainConfig(arch="context").arch == "context" and TrainConfig(arch="context-wide").arch == "context-wide"
 
 
 # ----------------------------------------------------------------------------------------------
@@ -235,6 +267,45 @@ def test_normalisation_statistics(dataset):
     np.testing.assert_allclose(stats.pose_mean, poses.astype(np.float64).mean(axis=0), rtol=1e-12)
     np.testing.assert_allclose(stats.pose_std, poses.astype(np.float64).std(axis=0), rtol=1e-9)
     assert NormStats.from_dict(stats.to_dict()) == stats
+
+
+def test_two_channel_split_reads_the_context_field_with_per_channel_statistics(dataset):
+    one, two = train_arrays(dataset), train_arrays(dataset, image_channels=2)
+    assert one[0].shape[1:] == (1, 32, 32) and two[0].shape[1:] == (2, 32, 32)
+    np.testing.assert_array_equal(two[0][:, :1], one[0])
+    np.testing.assert_array_equal(two[1], one[1])
+    np.testing.assert_array_equal(two[2], one[2])
+    assert not np.allclose(two[0][:, 0], two[0][:, 1])  # the context channel is the context field
+    stats = SplitData(dataset, "image_wise", "train", image_channels=2).compute_stats()
+    wide = two[0].astype(np.float64)
+    assert stats.image_channels == 2
+    np.testing.assert_allclose(stats.image_mean, wide.mean(axis=(0, 2, 3)), rtol=1e-12)
+    np.testing.assert_allclose(stats.image_std, wide.std(axis=(0, 2, 3)), rtol=1e-9)
+    assert stats.image_std[0] != pytest.approx(stats.image_std[1], rel=0.05)
+    # channel 0's statistics are the one-channel ones (up to the summation order of two columns)
+    single = SplitData(dataset, "image_wise", "train").compute_stats()
+    assert (stats.image_mean[0], stats.image_std[0]) == pytest.approx((single.image_mean, single.image_std),
+                                                                      rel=1e-12)
+    assert (stats.pose_mean, stats.pose_std) == (single.pose_mean, single.pose_std)
+
+
+def test_dataset_without_the_context_field(dataset, tmp_path):
+    """A dataset written before the context thumbnail was stored still trains one-channel nets; the
+    context nets are refused with the dataset and the missing field named."""
+    old = without_context(dataset, tmp_path / "old")
+    reader = DatasetReader(old)
+    assert reader.verify() == [] and not reader.has_field(CONTEXT_FIELD) and DatasetReader(dataset).has_field(
+        CONTEXT_FIELD)
+    np.testing.assert_array_equal(train_arrays(old)[0], train_arrays(dataset)[0])
+    for make in (lambda: SplitData(old, "image_wise", "train", image_channels=2),
+                 lambda: train(old, tmp_path / "out", TrainConfig(arch="context", epochs=1, augment=AUGMENT_OFF))):
+        with pytest.raises(InputError) as info:
+            make()
+        assert str(old) in str(info.value) and CONTEXT_FIELD in str(info.value)
+    assert not (tmp_path / "out").exists()
+    result = CliRunner().invoke(app, ["train", "--dataset", str(old), "--out", str(tmp_path / "cli"), "--arch",
+                                      "context", "--epochs", "1", "--json"])
+    assert result.exit_code == 2 and CONTEXT_FIELD in json.loads(result.stdout.strip().splitlines()[-1])["error"]
 
 
 def test_subset_is_seeded(dataset):
@@ -297,6 +368,59 @@ def test_augmentation_signs_are_per_sample_and_reproducible():
     noisy, noisy_poses = augment(images, poses, torch.Generator().manual_seed(5), AugmentConfig(symmetrize=False))
     assert torch.equal(noisy_poses, poses) and not torch.equal(noisy, images)
     assert (noisy - images).abs().max() < 0.1  # Gamma ~3 % of 0.6 m plus a few mm of field
+
+
+def two_channel_thumbnails(count: int) -> tuple[torch.Tensor, torch.Tensor]:
+    """`count` copies of (grasp, context) thumbnails of the asymmetric scene (neither has a mirror or
+    180-degree symmetry), and pose vectors with distinct angles."""
+    depth, pixel, theta = scene_depth(), np.array([[127.3, 109.6]]), np.array([0.7])
+    grasp = extract_thumbnails(depth, pixel, theta)[0]
+    context = extract_context_thumbnails(depth, pixel, theta, ThumbnailConfig(crop_size=192, out_size=32))[0]
+    images = torch.from_numpy(np.stack([grasp, context]))[None].repeat(count, 1, 1, 1)
+    poses = torch.stack([torch.full((count,), 0.6), torch.linspace(0.1, 0.5, count)], dim=1)
+    return images, poses
+
+
+def which_flip(image: torch.Tensor, original: torch.Tensor) -> tuple[bool, bool]:
+    """(rows flipped, columns flipped) that turn `original` into `image` (2-D); AssertionError if none does."""
+    matches = [(r, c) for r in (False, True) for c in (False, True)
+               if torch.equal(image, original.flip(0) if r and not c else original.flip(1) if c and not r
+                              else original.flip(0).flip(1) if r else original)]
+    assert len(matches) == 1, matches
+    return matches[0]
+
+
+def test_symmetrisation_flips_both_channels_together():
+    images, poses = two_channel_thumbnails(64)
+    out, out_poses = augment(images, poses, torch.Generator().manual_seed(11), AugmentConfig(noise=False))
+    flips = [which_flip(o[0], images[0, 0]) for o in out]
+    assert [which_flip(o[1], images[0, 1]) for o in out] == flips  # the context channel went the same way
+    assert len(set(flips)) == 4  # all four symmetries occur in the batch
+    rows = torch.tensor([r for r, _ in flips])
+    np.testing.assert_array_equal(out_poses[:, 1].numpy(), torch.where(rows, -poses[:, 1], poses[:, 1]).numpy())
+
+
+def test_noise_one_gamma_per_image_field_on_the_grasp_channel_only():
+    """Both channels come from one depth image: the same multiplicative factor scales both, the
+    additive field (grasp thumbnail's grid) reaches channel 0 only. The draws do not depend on the
+    channel count, so channel 0 is exactly what the one-channel augmentation gives."""
+    images, poses = two_channel_thumbnails(32)
+    config = AugmentConfig(gp_prob=1.0, symmetrize=False)
+    out, _ = augment(images, poses, torch.Generator().manual_seed(3), config)
+    alone, _ = augment(images[:, :1], poses, torch.Generator().manual_seed(3), config)
+    assert torch.equal(out[:, :1], alone)
+    alpha = out[:, 1] / images[:, 1]  # channel 1: alpha * depth, nothing added
+    assert torch.allclose(alpha, alpha[:, :1, :1].expand_as(alpha), rtol=1e-5, atol=0)
+    assert alpha[:, 0, 0].std() > 0.01  # Gamma(1000, 0.001): ~3 % per image
+    field = out[:, 0] - alpha[:, :1, :1] * images[:, 0]  # channel 0: the same alpha plus the field
+    assert field.abs().amax(dim=(1, 2)).min() > 1e-3
+    # without the field (no GP), channel 0 is the same alpha times its depth
+    scaled, _ = augment(images, poses, torch.Generator().manual_seed(3), AugmentConfig(gp_prob=0.0, symmetrize=False))
+    torch.testing.assert_close(scaled[:, 0] / images[:, 0], scaled[:, 1, :1, :1].expand(-1, 32, 32) /
+                               images[:, 1, :1, :1], rtol=1e-5, atol=0)
+    quiet = AugmentConfig(gp_prob=1.0, symmetrize=False, depth_noise=DepthNoiseConfig(gp_sigma=0.0))
+    np.testing.assert_array_equal(augment(images, poses, torch.Generator().manual_seed(3), quiet)[0][:, 1].numpy(),
+                                  out[:, 1].numpy())
 
 
 # ----------------------------------------------------------------------------------------------
@@ -365,6 +489,33 @@ def test_resume_equals_uninterrupted_run(dataset, tmp_path):
         train(dataset, tmp_path / "resumed", TrainConfig(arch="compact", epochs=3, seed=2, learning_rate=0.1))
 
 
+def test_context_net_trains_saves_reloads_and_predicts(dataset, tmp_path):
+    metrics = train(dataset, tmp_path, TrainConfig(arch="context", epochs=3, seed=1))  # augmentation on
+    assert metrics["arch"] == "context" and metrics["parameters"] == 70_898 and math.isfinite(metrics["val_ap"])
+    card = json.loads((tmp_path / CARD_NAME).read_text())
+    assert card["image_channels"] == 2 and card["inputs"]["images"].startswith("(N, 2, 32, 32)")
+    assert len(card["normalisation"]["image_mean"]) == 2 and len(card["normalisation"]["image_std"]) == 2
+    model = load_model(tmp_path)
+    assert model.image_channels == 2 and model.stats.image_channels == 2
+    images, poses, metric = train_arrays(dataset, image_channels=2)
+    q = model.predict(images, poses)
+    assert q.shape == (len(metric),) and np.all((q >= 0) & (q <= 1))
+    # the same network in the trainer's validation pass and through the reloaded model
+    from suctionbench.learning.train import evaluate
+
+    val = SplitData(dataset, "image_wise", "val", image_channels=2)
+    scores = evaluate(model.network, val, model.stats, 0.2, torch.device("cpu"))["scores"]
+    val_images = np.concatenate([b.images for b in val.batches(64)])
+    val_poses = np.concatenate([b.poses for b in val.batches(64)])
+    np.testing.assert_allclose(model.predict(val_images, val_poses), scores, rtol=1e-6, atol=1e-7)
+    assert card["metrics"]["val_ap"] == metrics["val_ap"]
+    with pytest.raises(InputError, match=r"expected \(N, 2, 32, 32\)"):
+        model.predict(images[:, 0], poses)
+    # resuming continues the two-channel run
+    more = train(dataset, tmp_path, TrainConfig(arch="context", epochs=4, seed=1))
+    assert more["resumed_from_epoch"] == 3 and more["epochs_trained_now"] == 1
+
+
 def test_learning_rate_staircase(dataset, tmp_path):
     # 205 training datapoints, batch 64: 4 steps an epoch; decay every 0.5 * 205 = 102.5 examples seen.
     train(dataset, tmp_path, TrainConfig(epochs=2, decay_epochs=0.5, decay_rate=0.5, **FAST))
@@ -389,6 +540,52 @@ def test_checkpoint_round_trip(tmp_path):
     np.testing.assert_array_equal(before, after)
     assert before.shape == (300,) and ((before >= 0) & (before <= 1)).all()
     assert loaded.card["normalisation"] == stats.to_dict() and loaded.arch == "compact"
+
+
+def test_normalisation_statistics_per_channel_and_scalar_compatibility():
+    two = NormStats((0.58, 0.6), (0.01, 0.004), (0.58, 0.3), (0.01, 0.2), count=10)
+    data = two.to_dict()
+    assert data["image_mean"] == [0.58, 0.6] and data["image_std"] == [0.01, 0.004]
+    assert NormStats.from_dict(json.loads(json.dumps(data))) == two and two.image_channels == 2
+    images = torch.tensor([0.59, 0.61]).reshape(1, 2, 1, 1).expand(3, 2, 4, 4)
+    normalised, _ = two.normalise(images, torch.zeros(3, 2))
+    torch.testing.assert_close(normalised[:, 0], torch.full((3, 4, 4), 1.0))  # (0.59 - 0.58) / 0.01
+    torch.testing.assert_close(normalised[:, 1], torch.full((3, 4, 4), 2.5))  # (0.61 - 0.6) / 0.004
+    with pytest.raises(ValueError, match="2 channel"):
+        two.normalise(images[:, :1], torch.zeros(3, 2))
+    # one channel: scalars in and out, however given, and the card form every model has used
+    one = NormStats(0.58, 0.01, (0.58, 0.3), (0.01, 0.2), count=10)
+    assert NormStats((0.58,), [0.01], (0.58, 0.3), (0.01, 0.2), count=10) == one and one.image_channels == 1
+    assert one.to_dict() == {"image_mean": 0.58, "image_std": 0.01, "pose_mean": [0.58, 0.3],
+                             "pose_std": [0.01, 0.2], "count": 10}
+    x = torch.rand(5, 1, 32, 32, generator=torch.Generator().manual_seed(0)) * 0.1 + 0.55
+    assert torch.equal(one.normalise(x, torch.zeros(5, 2))[0], (x - 0.58) / 0.01)
+    shipped = json.loads((asset_path("models", "gqcnn-compact") / CARD_NAME).read_text())["normalisation"]
+    assert isinstance(shipped["image_mean"], float) and NormStats.from_dict(shipped).to_dict() == shipped
+    for bad in ({**data, "image_std": [0.01]}, {**data, "image_std": [0.01, 0.0]}, {**data, "image_mean": "x"},
+                {**data, "image_mean": []}):
+        with pytest.raises(InputError, match="normalisation"):
+            NormStats.from_dict(bad)
+
+
+def test_checkpoint_round_trip_two_channels(tmp_path):
+    rng = np.random.default_rng(0)
+    stats = NormStats((0.58, 0.6), (0.01, 0.004), (0.58, 0.3), (0.01, 0.2), count=10)
+    model = GQCNNModel(build_model("context", torch.Generator().manual_seed(1)), stats, {"arch": "context"})
+    images = rng.uniform(0.55, 0.6, (70, 2, 32, 32)).astype(np.float32)
+    poses = np.column_stack([rng.uniform(0.55, 0.6, 70), rng.uniform(0, 0.6, 70)]).astype(np.float32)
+    before = model.predict(images, poses, batch_size=32)
+    save_model(tmp_path / "m", model)
+    loaded = load_model(tmp_path / "m")
+    np.testing.assert_array_equal(loaded.predict(images, poses), before)
+    assert loaded.card["image_channels"] == 2 and loaded.stats == stats
+    with pytest.raises(InputError, match="image channel"):  # a one-channel normalisation for a two-channel net
+        GQCNNModel(build_model("context"), NormStats(0.58, 0.01, (0.58, 0.3), (0.01, 0.2)), {"arch": "context"})
+    card = json.loads((tmp_path / "m" / CARD_NAME).read_text())
+    card["image_channels"] = 1
+    (tmp_path / "m" / CARD_NAME).write_text(json.dumps(card))
+    with pytest.raises(InputError, match="image channel"):
+        load_model(tmp_path / "m")
 
 
 def test_bad_inputs(dataset, tmp_path):

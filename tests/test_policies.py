@@ -29,6 +29,7 @@ from suctionbench.policies.base import (
 from suctionbench.policies.gqcnn import CEMConfig, GQCNNPolicy, fit_gmm
 from suctionbench.sensing.camera import PRIMESENSE, sample_camera_pose
 from suctionbench.sensing.noise import apply_axial_noise
+from suctionbench.sensing.thumbnails import extract_context_thumbnails, extract_thumbnails, project_grasps
 
 HEURISTICS = ["random", "centroid", "planarity", "planarity-centroid"]
 OBJECTS = ["basic/box_tea", "typical/mug_classic", "adversarial/narrow_gear"]
@@ -76,6 +77,22 @@ class CentreDepthStub:
         self.calls.append((images, poses))
         centre = images[:, 15:17, 15:17].mean(axis=(1, 2)).astype(float)
         return np.exp(-np.maximum(centre - self.z_best, 0.0) / self.scale)
+
+
+class ContextStub:
+    """A two-channel scorer (grasp, context thumbnails): q falls with the context thumbnail's centre
+    depth; records its inputs."""
+
+    image_channels = 2
+
+    def __init__(self):
+        self.calls = []
+
+    def predict(self, images: np.ndarray, poses: np.ndarray) -> np.ndarray:
+        assert images.dtype == np.float32 and images.shape[1:] == (2, 32, 32)
+        assert poses.dtype == np.float32 and poses.shape == (len(images), 2)
+        self.calls.append((images, poses))
+        return np.exp(-10.0 * images[:, 1, 15:17, 15:17].mean(axis=(1, 2)).astype(float))
 
 
 def dome_observation(apex=(350, 220), radius_px=100, height=0.6, dome=0.05, curvature=1e-6) -> Observation:
@@ -336,6 +353,48 @@ def test_cem_on_rendered_scenes(scenes):
         # the thumbnail centre is the grasp pixel's depth (a flat 3 px neighbourhood on most grasps)
         centre = images[:, 15:17, 15:17].mean(axis=(1, 2))
         assert np.median(np.abs(centre - poses[:, 0])) < 1e-3
+
+
+def test_cem_feeds_a_two_channel_model_the_grasp_and_context_thumbnails():
+    observation = dome_observation()
+    stub = ContextStub()
+    action = GQCNNPolicy(stub, num_seed_samples=40, num_gmm_samples=10, num_iters=1).plan(
+        observation, np.random.default_rng(0))
+    assert [len(images) for images, _ in stub.calls] == [40, 10]
+    images = np.concatenate([images for images, _ in stub.calls])
+    c = action.candidates
+    _, _, angles = project_grasps(c["points"], c["approaches"], PRIMESENSE)
+    np.testing.assert_array_equal(images[:, 0], extract_thumbnails(observation.depth, c["pixels"], angles))
+    np.testing.assert_array_equal(images[:, 1], extract_context_thumbnails(observation.depth, c["pixels"], angles))
+    assert not np.allclose(images[:, 0], images[:, 1], atol=1e-3)
+
+
+def test_cem_plans_with_a_trained_format_context_model(tmp_path):
+    """A `context` network saved and loaded as a model directory (lazily, as `make_policy` does) plans
+    a grasp on the object; its q is the network's for the two thumbnails of that grasp."""
+    import torch
+
+    from suctionbench.learning.checkpoint import GQCNNModel, load_model, save_model
+    from suctionbench.learning.data import NormStats
+    from suctionbench.learning.models import build_model
+
+    stats = NormStats((0.57, 0.59), (0.02, 0.01), (0.57, 0.2), (0.02, 0.1), count=1)
+    save_model(tmp_path, GQCNNModel(build_model("context", torch.Generator().manual_seed(0)), stats,
+                                    {"arch": "context"}))
+    policy = make_policy("gqcnn", model=tmp_path, num_seed_samples=30, num_gmm_samples=10, num_iters=1)
+    observation = dome_observation()
+    action = policy.plan(observation, np.random.default_rng(1))
+    assert action.info["evaluations"] == 40 and 0.0 <= action.q <= 1.0
+    assert action.q == action.candidates["q"].max()
+    u, v = np.round(action.pixel).astype(int)
+    assert observation.depth[v, u] < 0.6 - 0.01  # on the dome, not the table
+    best = action.info["chosen"]
+    pixels, points, approaches = (action.candidates[k][best:best + 1] for k in ("pixels", "points", "approaches"))
+    _, _, angles = project_grasps(points, approaches, PRIMESENSE)
+    both = np.stack([extract_thumbnails(observation.depth, pixels, angles),
+                     extract_context_thumbnails(observation.depth, pixels, angles)], axis=1)
+    q = load_model(tmp_path).predict(both, action.candidates["poses"][best:best + 1])
+    assert float(q[0]) == pytest.approx(action.q, rel=1e-6)
 
 
 # --------------------------------------------------------------------------------------------------

@@ -266,6 +266,39 @@ def test_corruption_is_detected(dataset, data, kind):
     assert DatasetReader(dataset).verify() == []
 
 
+def test_dataset_written_before_the_context_field(dataset, data):
+    """Shards whose manifests do not list a later field (datasets written before it existed) are
+    intact: their other fields read and verify; the missing field is named when asked for."""
+    from suctionbench.dataset.verify import verify_dataset
+
+    name = "context_ims_tf_table"
+    assert name in storage.LATER_FIELDS
+    for index in range(3):
+        manifest_path = dataset / "tensors" / f"shard_{index:05d}.json"
+        manifest = json.loads(manifest_path.read_text())
+        del manifest["files"][f"{name}_{index:05d}.npz"]
+        manifest_path.write_text(json.dumps(manifest))
+        (dataset / "tensors" / f"{name}_{index:05d}.npz").unlink()
+    write_card(dataset, {"datapoints": N})
+    card = json.loads((dataset / "config.json").read_text())
+    del card["fields"][name]
+    (dataset / "config.json").write_text(json.dumps(card))
+    reader = DatasetReader(dataset)
+    assert reader.shard_indices == [0, 1, 2] and reader.verify(expected_datapoints=N) == []
+    assert not reader.has_field(name) and reader.has_field("depth_ims_tf_table")
+    assert name not in reader.shard(1) and len(reader.shard(1)) == len(FIELDS) - 1
+    np.testing.assert_array_equal(reader.field("depth_ims_tf_table"), data["depth_ims_tf_table"])
+    with pytest.raises(InputError, match=f"{dataset}.*shard 0 has no field '{name}'"):
+        reader.field(name)
+    assert not any("fields" in p for p in verify_dataset(dataset))
+    # a manifest lacking a field that every dataset has is still malformed
+    manifest_path = dataset / "tensors" / "shard_00002.json"
+    manifest = json.loads(manifest_path.read_text())
+    del manifest["files"]["hand_poses_00002.npz"]
+    manifest_path.write_text(json.dumps(manifest))
+    assert DatasetReader(dataset).bad_shards() == [2]
+
+
 def test_corrupt_file_is_caught_without_hash_check(dataset):
     _truncate(dataset / "tensors" / "hand_poses_00001.npz")
     with pytest.raises(InputError, match="hand_poses_00001.npz"):

@@ -4,6 +4,7 @@ Layout of a dataset directory ``DIR``::
 
     DIR/config.json                                   dataset card (+ the keys gqcnn's TensorDataset reads)
     DIR/tensors/depth_ims_tf_table_XXXXX.npz          float32 (n, 32, 32, 1)  depth thumbnails
+    DIR/tensors/context_ims_tf_table_XXXXX.npz        float32 (n, 32, 32, 1)  context thumbnails (3x the view)
     DIR/tensors/hand_poses_XXXXX.npz                  float32 (n, 7)          grasp pose vectors
     DIR/tensors/robust_suction_wrench_resistance_XXXXX.npz  float32 (n,)     robust label in [0, 1]
     DIR/tensors/object_labels_XXXXX.npz               int32 (n,)   index into the card's object list
@@ -99,7 +100,13 @@ FIELDS: dict[str, FieldSpec] = {
     "seal_flags": FieldSpec(np.dtype(np.uint8), (), "nominal seal formed (0/1)", binary=True),
     "wrench_resistance": FieldSpec(np.dtype(np.uint8), (), "nominal wrench resistance (0/1)", binary=True),
 }
-"""Every field of a shard, in storage order. All are required in every shard."""
+"""Every field of a shard, in storage order. All are required in every shard `DatasetWriter` writes."""
+
+LATER_FIELDS = ("context_ims_tf_table",)
+"""Fields added after the first datasets were written. A shard written before one existed has no
+file for it and its manifest does not list it. Such a shard is intact, not damaged: `verify`
+accepts it and readers read its other fields; `shard` raises InputError naming the field only
+when asked for it, and `has_field` tells in advance (the context GQ-CNNs need the field)."""
 
 GQCNN_FIELDS = ("depth_ims_tf_table", "hand_poses", "robust_suction_wrench_resistance")
 """The fields the original gqcnn trainer reads (image, pose, metric)."""
@@ -145,6 +152,15 @@ def gqcnn_field_config() -> dict[str, dict[str, Any]]:
         entry.update(zip(("height", "width", "channels"), spec.shape, strict=False))
         out[name] = entry
     return out
+
+
+def is_field_config(fields: Any) -> bool:
+    """Whether a card's ``fields`` entry is the storage schema `gqcnn_field_config`, or that schema
+    without some `LATER_FIELDS` (the card of a dataset written before they existed)."""
+    schema = gqcnn_field_config()
+    if not isinstance(fields, dict) or not set(schema) - set(LATER_FIELDS) <= set(fields) <= set(schema):
+        return False
+    return all(fields[name] == schema[name] for name in fields)
 
 
 # -- low-level file helpers ------------------------------------------------------------------------
@@ -406,15 +422,23 @@ class DatasetReader:
         """Datapoints in shard `index` (from its manifest)."""
         return self._manifest(index)["num_datapoints"]
 
+    def has_field(self, name: str, shards: Sequence[int] | None = None) -> bool:
+        """Whether every listed shard (or every one of `shards`) stores field `name`, by its manifest:
+        False for a `LATER_FIELDS` field in a dataset (or shard) written before the field existed."""
+        indices = self.shard_indices if shards is None else shards
+        return all(shard_file_name(name, i) in self._manifest(i)["files"] for i in indices)
+
     def shard(self, index: int, *, verify: bool = True, fields: Sequence[str] | None = None) -> dict[str, np.ndarray]:
-        """The arrays of shard `index` (all fields, or only `fields`), checked against the manifest.
+        """The arrays of shard `index` (all the fields it stores, or only `fields`), checked against
+        the manifest.
 
         With ``verify=True`` each file's sha256 must match the manifest; either way a missing or
         unreadable file, or an array of the wrong shape or dtype, raises InputError naming the file.
         Each file is read once: the same bytes are hashed and decoded.
         """
         manifest = self._manifest(index)
-        names = list(FIELDS) if fields is None else list(fields)
+        stored = [name for name in FIELDS if shard_file_name(name, index) in manifest["files"]]
+        names = stored if fields is None else list(fields)
         unknown = [name for name in names if name not in FIELDS]
         if unknown:
             raise InputError(f"fields {unknown}: unknown (known: {list(FIELDS)})")
@@ -422,6 +446,9 @@ class DatasetReader:
         out: dict[str, np.ndarray] = {}
         for name in names:
             file_name = shard_file_name(name, index)
+            if file_name not in manifest["files"]:  # only a LATER_FIELDS field can be absent
+                raise InputError(f"dataset '{self.directory}': shard {index} has no field '{name}' (written "
+                                 "before suctionbench stored it; regenerate the dataset to add it)")
             path = self.tensor_dir / file_name
             data = _read_file(path, "shard file", f"shard {index} is incomplete")
             if verify:
@@ -483,13 +510,15 @@ class DatasetReader:
         except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
             raise InputError(f"shard {index}: manifest '{path}' unreadable ({type(exc).__name__})") from None
         expected_files = {shard_file_name(name, index) for name in FIELDS}
+        required_files = expected_files - {shard_file_name(name, index) for name in LATER_FIELDS}
         ok = (
             isinstance(manifest, dict) and manifest.get("format") == MANIFEST_FORMAT
             and manifest.get("shard") == index
             and isinstance(manifest.get("num_datapoints"), int) and manifest["num_datapoints"] >= 1
             and isinstance(manifest.get("datapoints_per_shard"), int)
             and manifest["num_datapoints"] <= manifest["datapoints_per_shard"]
-            and isinstance(manifest.get("files"), dict) and set(manifest["files"]) == expected_files
+            and isinstance(manifest.get("files"), dict)
+            and required_files <= set(manifest["files"]) <= expected_files
             and all(isinstance(f, dict) and isinstance(f.get("sha256"), str) and isinstance(f.get("bytes"), int)
                     for f in manifest["files"].values())
         )

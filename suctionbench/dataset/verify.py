@@ -26,7 +26,7 @@ from suctionbench.dataset.storage import (
     TENSOR_DIR,
     DatasetReader,
     dexnet_compatible,
-    gqcnn_field_config,
+    is_field_config,
     read_card,
 )
 from suctionbench.errors import InputError
@@ -103,7 +103,7 @@ def remove_dataset(directory: str | Path) -> None:
         card = read_card(directory)
     except InputError:
         card = None
-    if card is None or card.get("fields") != gqcnn_field_config():
+    if card is None or not is_field_config(card.get("fields")):
         raise InputError(f"--overwrite '{directory}': holds no suctionbench dataset card ({CARD_NAME}), so it was "
                          "not written by suctionbench; nothing removed (choose another --out)")
     foreign = foreign_entries(directory)
@@ -139,7 +139,7 @@ def verify_dataset(directory: str | Path) -> list[str]:
         return [str(exc)]
     problems: list[str] = []
     card_path = directory / CARD_NAME
-    if card.get("fields") != gqcnn_field_config():
+    if not is_field_config(card.get("fields")):
         problems.append(f"dataset card '{card_path}': no storage schema ('fields'): not a suctionbench dataset card")
     expected = card.get("datapoints")
     if isinstance(expected, bool) or not isinstance(expected, int) or expected < 1:

@@ -53,10 +53,15 @@ class GQCNNModel:
     """A trained GQ-CNN ready for inference: network + input normalisation + model card.
 
     `predict` takes thumbnails and pose vectors exactly as a dataset stores them (metres, unsigned
-    approach angle) and returns the probability that each grasp succeeds.
+    approach angle) and returns the probability that each grasp succeeds. `image_channels` is what
+    the network reads: 1 (grasp thumbnail) or 2 (grasp and context thumbnail, the context nets).
     """
 
     def __init__(self, network: torch.nn.Module, stats: NormStats, card: dict[str, Any], device: str = "cpu"):
+        channels = int(getattr(network, "image_channels", 1))
+        if stats.image_channels != channels:
+            raise InputError(f"GQ-CNN model '{card.get('arch')}': the network reads {channels} image channel(s), "
+                             f"the normalisation statistics are for {stats.image_channels}")
         self.network = network.to(device).eval()
         self.stats = stats
         self.card = card
@@ -66,15 +71,29 @@ class GQCNNModel:
     def arch(self) -> str:
         return self.card["arch"]
 
+    @property
+    def image_channels(self) -> int:
+        """Image channels the network reads (1: grasp thumbnail; 2: grasp and context thumbnail)."""
+        return int(getattr(self.network, "image_channels", 1))
+
     def predict(self, images: np.ndarray, poses: np.ndarray, batch_size: int = PREDICT_BATCH) -> np.ndarray:
-        """Success probability q (N,) float64 for thumbnails (N, 32, 32) [or (N, 32, 32, 1)] float32 metres
-        and poses (N, 2) = [gripper depth (m), approach angle (rad)]; batched, without gradients."""
-        images = np.asarray(images)
+        """Success probability q (N,) float64 for thumbnails float32 metres and poses (N, 2) =
+        [gripper depth (m), approach angle (rad)]; batched, without gradients.
+
+        Thumbnails: (N, C, 32, 32) with C = `image_channels` (channel 0 the grasp thumbnail, 1 the
+        context thumbnail); a one-channel model also takes (N, 32, 32) and (N, 32, 32, 1).
+        """
+        images = given = np.asarray(images)
         poses = np.asarray(poses)
-        if images.ndim == 4 and images.shape[-1] == 1:
+        channels, size = self.image_channels, IMAGE_SIZE
+        if channels == 1 and images.ndim == 4 and images.shape[-1] == 1:
             images = images[..., 0]
-        if images.ndim != 3 or images.shape[1:] != (IMAGE_SIZE, IMAGE_SIZE):
-            raise InputError(f"images: shape {images.shape}, expected (N, {IMAGE_SIZE}, {IMAGE_SIZE})")
+        if channels == 1 and images.ndim == 3:
+            images = images[:, None]
+        if images.ndim != 4 or images.shape[1:] != (channels, size, size):
+            want = f"(N, {size}, {size})" if channels == 1 else f"(N, {channels}, {size}, {size})"
+            raise InputError(f"images: shape {given.shape}, expected {want} for architecture "
+                             f"'{self.card.get('arch')}'")
         if poses.shape != (len(images), 2):
             raise InputError(f"poses: shape {poses.shape}, expected ({len(images)}, 2) to match the images")
         for name, arr in (("images", images), ("poses", poses)):
@@ -85,7 +104,7 @@ class GQCNNModel:
             for start in range(0, len(images), batch_size):
                 im = torch.from_numpy(np.ascontiguousarray(images[start:start + batch_size], dtype=np.float32))
                 po = torch.from_numpy(np.ascontiguousarray(poses[start:start + batch_size], dtype=np.float32))
-                im, po = self.stats.normalise(im[:, None].to(self.device), po.to(self.device))
+                im, po = self.stats.normalise(im.to(self.device), po.to(self.device))
                 logits = self.network(im, po).float()
                 out[start:start + len(im)] = torch.softmax(logits, dim=1)[:, 1].cpu().numpy()
         return out
@@ -94,7 +113,8 @@ class GQCNNModel:
 def save_model(directory: str | Path, model: GQCNNModel) -> Path:
     """Write ``model.safetensors`` then ``model.json`` into `directory`; returns the card path.
 
-    The card is `model.card` plus the arch, normalisation statistics, format tag and weights hash.
+    The card is `model.card` plus the arch, image channels, normalisation statistics, format tag and
+    weights hash.
     """
     from safetensors.torch import save
 
@@ -110,6 +130,7 @@ def save_model(directory: str | Path, model: GQCNNModel) -> Path:
     card = dict(model.card)
     card.update(format=CARD_FORMAT, normalisation=model.stats.to_dict(), weights=WEIGHTS_NAME,
                 weights_sha256=file_digest(weights)[0])
+    card["image_channels"] = model.image_channels  # cards without it (made before the context nets): 1
     text = json.dumps(json_safe(card), indent=2, allow_nan=False) + "\n"
     path = directory / CARD_NAME
     with atomic_path(path) as tmp:
@@ -163,6 +184,11 @@ def load_model(directory: str | Path, device: str = "cpu") -> GQCNNModel:
         raise InputError(f"model weights '{weights}': unreadable ({exc})") from None
     check_finite_weights(tensors, f"model weights '{weights}'")
     network = build_model(card["arch"])
+    channels = network.image_channels
+    if card.get("image_channels", 1) != channels or stats.image_channels != channels:
+        raise InputError(f"model card '{Path(directory) / CARD_NAME}': architecture '{card['arch']}' reads "
+                         f"{channels} image channel(s), but the card records {card.get('image_channels', 1)} "
+                         f"and normalisation statistics for {stats.image_channels}")
     try:
         network.load_state_dict(tensors, strict=True)
     except RuntimeError as exc:

@@ -9,10 +9,19 @@ once per epoch and memory stays at a few shards whatever the dataset size. The n
 on a background thread while the current one trains (decompression and hashing release the GIL).
 All randomness comes from a `numpy.random.Generator` the caller passes in and checkpoints.
 
-Normalisation (gqcnn): one scalar mean and standard deviation over every pixel of every training
-image, and a per-dimension mean and standard deviation of the pose vector [gripper depth, approach
-angle], from the training split only, in one streaming pass (per-shard moments merged with Chan et
-al.'s parallel formula, so the result does not suffer from E[x^2] - E[x]^2 cancellation).
+Image channels. A batch holds images (B, C, 32, 32): C = 1, the grasp thumbnail
+(``depth_ims_tf_table``), for dn3 and compact; C = 2, the grasp and the context thumbnail
+(``context_ims_tf_table``, `suctionbench.sensing.thumbnails.THUMBNAIL_CONTEXT`), for the context
+nets. `SplitData` reads the context field only when asked for two channels, and refuses a dataset
+written before the field existed with an InputError naming the dataset and the field.
+
+Normalisation (gqcnn): one mean and standard deviation per image channel over every pixel of every
+training image (for one channel gqcnn's single scalar pair, and stored as scalars as before), and a
+per-dimension mean and standard deviation of the pose vector [gripper depth, approach angle], from
+the training split only, in one streaming pass (per-shard moments merged with Chan et al.'s
+parallel formula, so the result does not suffer from E[x^2] - E[x]^2 cancellation). The context
+channel gets its own pair: it is a block mean over 3x the field of view, so it sees more table and
+its spread differs from the grasp thumbnail's.
 
 Augmentation and the sign of the approach angle
 -----------------------------------------------
@@ -40,10 +49,32 @@ fair coins (rotate, flip left-right, flip up-down) compose to "flip rows" = rota
 two directly: the same distribution over the four symmetries with fewer draws. At inference the
 policy passes the dataset's unsigned angle, i.e. the "down" case the network was trained on too.
 
+Both channels are cut by the same `extract_thumbnails` sampling geometry (``_sample_coordinates``)
+with the same grasp pixel, the same approach angle theta and the same centre (n - 1) / 2; only
+the step (3 vs 9 image pixels per thumbnail pixel) differs. Row i and column j of either channel
+lie along the same image directions d and e, so a row or column flip of both channels together is
+the thumbnail pair cut from the mirrored (or theta + pi) scene, and `symmetrize` flips every
+channel of a sample with that sample's flags.
+
 Noise (gqcnn's Dex-Net 3.0 recipe, `apply_depth_noise_torch`): every training image gets a Gamma
 multiplicative factor and, with probability 0.5, the additive correlated field; the pose's gripper
 depth is not scaled (as in gqcnn; the dataset stores the noise-free depth next to noisy thumbnails).
 Noise acts on depths in metres, so it is applied before normalisation, and symmetrisation after.
+
+With a context channel the two thumbnails come from one depth image, so the augmentation noise
+must be that of one noisy image seen twice. The Gamma factor alpha scales the whole depth image (a
+calibration scale error), and the context pixels are block means of that same scaled image, so the
+SAME alpha multiplies both channels of a sample. The additive field is drawn, as in gqcnn, on the
+grasp thumbnail's 32 x 32 grid (it decorrelates over ~4 thumbnail pixels = 12 image pixels) and
+goes to channel 0 only. Added to the context channel too it would put the same error at pixel
+indices that lie 3x farther from the grasp, a correlation between the channels that no sensor
+makes. The consistent context field would be that image-space field averaged over 9 x 9 blocks and
+sampled every 9 pixels, mostly outside the grasp thumbnail's footprint: a field the paper's noise
+model does not define. Nor is it the field scaled by 1/9, the reduction an 81-pixel mean gives
+white noise: a 9-pixel block spans only 3 thumbnail pixels of a field correlated over about 4, so
+averaging would shrink it far less. The context channel therefore trains with the multiplicative
+noise only; its stored pixels are block means of the dataset's noisy render, so generation-time
+noise is in them already, averaged as a real sensor's would be.
 """
 
 from __future__ import annotations
@@ -67,6 +98,12 @@ from suctionbench.sensing.noise import DepthNoiseConfig, apply_depth_noise_torch
 IMAGE_FIELD = "depth_ims_tf_table"
 """Dataset field with the depth thumbnails (n, 32, 32, 1), metres."""
 
+CONTEXT_FIELD = "context_ims_tf_table"
+"""Dataset field with the context thumbnails (n, 32, 32, 1), metres: image channel 1 of the context nets."""
+
+IMAGE_FIELDS = (IMAGE_FIELD, CONTEXT_FIELD)
+"""Dataset field of each image channel, in channel order."""
+
 POSE_FIELD = "hand_poses"
 """Dataset field with the pose vectors (n, 7); `POSE_COLUMNS` are the network's input."""
 
@@ -86,7 +123,8 @@ so normalisation only centres that input instead of dividing by ~0."""
 
 @dataclass(frozen=True)
 class Batch:
-    """A batch as stored: images (B, 32, 32) float32 metres, poses (B, 2) float32 unsigned, metric (B,)."""
+    """A batch as stored: images (B, C, 32, 32) float32 metres (channel 0 the grasp thumbnail, 1 the
+    context thumbnail if read), poses (B, 2) float32 unsigned, metric (B,)."""
 
     images: np.ndarray
     poses: np.ndarray
@@ -96,15 +134,32 @@ class Batch:
         return len(self.metric)
 
 
+def _channel_values(value: Any) -> float | tuple[float, ...]:
+    """A scalar (one channel) or a tuple of floats, one per channel; a one-element sequence is a scalar."""
+    if isinstance(value, list | tuple | np.ndarray):
+        values = tuple(float(x) for x in np.asarray(value, dtype=float).reshape(-1))
+        if not values:
+            raise ValueError("no image channel")
+        return values[0] if len(values) == 1 else values
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        raise TypeError(f"not a number or a list of numbers: {value!r}")
+    return float(value)
+
+
 @dataclass(frozen=True)
 class NormStats:
-    """Input normalisation of a GQ-CNN: x_normalised = (x - mean) / std."""
+    """Input normalisation of a GQ-CNN: x_normalised = (x - mean) / std, per image channel.
 
-    image_mean: float
-    """Mean depth (m) over all pixels of all training thumbnails."""
+    `image_mean` and `image_std` are scalars for one image channel (as gqcnn, and every model
+    trained before the context nets) and tuples with one value per channel otherwise; a
+    one-element sequence becomes a scalar, so equal statistics compare equal however they were given.
+    """
 
-    image_std: float
-    """Standard deviation (m) of those pixels."""
+    image_mean: float | tuple[float, ...]
+    """Mean depth (m) over all pixels of all training thumbnails, per image channel."""
+
+    image_std: float | tuple[float, ...]
+    """Standard deviation (m) of those pixels, per image channel."""
 
     pose_mean: tuple[float, float]
     """Mean of [gripper depth (m), approach angle (rad)] over the training datapoints."""
@@ -115,29 +170,56 @@ class NormStats:
     count: int = 0
     """Number of datapoints the statistics come from."""
 
+    def __post_init__(self) -> None:
+        mean, std = _channel_values(self.image_mean), _channel_values(self.image_std)
+        if isinstance(mean, tuple) != isinstance(std, tuple) or (isinstance(mean, tuple) and len(mean) != len(std)):
+            raise ValueError(f"image_mean {self.image_mean!r} and image_std {self.image_std!r}: different "
+                             "numbers of channels")
+        object.__setattr__(self, "image_mean", mean)
+        object.__setattr__(self, "image_std", std)
+
+    @property
+    def image_channels(self) -> int:
+        """Image channels the statistics normalise (1 for scalars)."""
+        return len(self.image_mean) if isinstance(self.image_mean, tuple) else 1
+
     def to_dict(self) -> dict[str, Any]:
-        return {"image_mean": self.image_mean, "image_std": self.image_std, "pose_mean": list(self.pose_mean),
-                "pose_std": list(self.pose_std), "count": self.count}
+        """Plain values for a model card: scalar image mean and std for one channel (the form every
+        model card has used), lists for more."""
+        def form(value: float | tuple[float, ...]) -> float | list[float]:
+            return list(value) if isinstance(value, tuple) else value
+
+        return {"image_mean": form(self.image_mean), "image_std": form(self.image_std),
+                "pose_mean": list(self.pose_mean), "pose_std": list(self.pose_std), "count": self.count}
 
     @classmethod
     def from_dict(cls, data: Any, source: str = "normalisation") -> NormStats:
-        """Inverse of `to_dict`; InputError naming `source` if a value is missing or not a usable number."""
+        """Inverse of `to_dict` (image mean and std: scalars, or lists of one value per channel);
+        InputError naming `source` if a value is missing or not a usable number."""
         try:
-            stats = cls(float(data["image_mean"]), float(data["image_std"]),
+            stats = cls(data["image_mean"], data["image_std"],
                         tuple(float(x) for x in data["pose_mean"]), tuple(float(x) for x in data["pose_std"]),
                         int(data.get("count", 0)))
         except (KeyError, TypeError, ValueError) as exc:
             raise InputError(f"{source}: malformed normalisation statistics ({exc!r})") from None
-        values = [stats.image_mean, stats.image_std, *stats.pose_mean, *stats.pose_std]
+        image_mean, image_std = np.atleast_1d(stats.image_mean).tolist(), np.atleast_1d(stats.image_std).tolist()
+        values = [*image_mean, *image_std, *stats.pose_mean, *stats.pose_std]
         if len(stats.pose_mean) != 2 or len(stats.pose_std) != 2 or not all(map(math.isfinite, values)) \
-                or min(stats.image_std, *stats.pose_std) <= 0:
+                or min(*image_std, *stats.pose_std) <= 0:
             raise InputError(f"{source}: normalisation statistics must be finite with positive stds, got {data}")
         return stats
 
     def normalise(self, images: torch.Tensor, poses: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """Network inputs from images (B, 1, H, W) in metres and poses (B, 2)."""
+        """Network inputs from images (B, C, H, W) in metres, C = `image_channels`, and poses (B, 2)."""
+        if images.ndim != 4 or images.shape[1] != self.image_channels:
+            raise ValueError(f"images {tuple(images.shape)}: expected (B, {self.image_channels}, H, W) for "
+                             f"normalisation statistics of {self.image_channels} channel(s)")
         mean = torch.tensor(self.pose_mean, dtype=poses.dtype, device=poses.device)
         std = torch.tensor(self.pose_std, dtype=poses.dtype, device=poses.device)
+        if isinstance(self.image_mean, tuple):
+            image_mean = torch.tensor(self.image_mean, dtype=images.dtype, device=images.device)[None, :, None, None]
+            image_std = torch.tensor(self.image_std, dtype=images.dtype, device=images.device)[None, :, None, None]
+            return (images - image_mean) / image_std, (poses - mean) / std
         return (images - self.image_mean) / self.image_std, (poses - mean) / std
 
 
@@ -191,13 +273,17 @@ def symmetrize(images: torch.Tensor, angles: torch.Tensor, flip_rows: torch.Tens
 
 def augment(images: torch.Tensor, poses: torch.Tensor, generator: torch.Generator, config: AugmentConfig
             ) -> tuple[torch.Tensor, torch.Tensor]:
-    """Augmented copies of images (B, 1, H, W) in metres and poses (B, 2) [depth, angle].
+    """Augmented copies of images (B, C, H, W) in metres and poses (B, 2) [depth, angle].
 
-    Draws from `generator` (on its device) in a fixed order whatever is enabled per sample, so a run
-    is reproducible from the generator state.
+    Channel 0 is the grasp thumbnail, channel 1 (if any) the context thumbnail of the same image:
+    one Gamma factor per sample scales both, the additive field goes to channel 0 only, and the
+    flips act on both channels alike (module docstring, "Both channels..." and "With a context
+    channel..."). Draws from `generator` (on its device) in a fixed order whatever is enabled per
+    sample and however many channels there are, so a run is reproducible from the generator state.
     """
     if config.noise:
-        images = apply_depth_noise_torch(images, generator, config.depth_noise, prob=1.0, gp_prob=config.gp_prob)
+        images = apply_depth_noise_torch(images, generator, config.depth_noise, prob=1.0, gp_prob=config.gp_prob,
+                                         field_channels=1 if images.shape[1] > 1 else None)
     if config.symmetrize:
         flips = torch.rand(2, len(images), generator=generator, device=generator.device) < 0.5
         images, angles = symmetrize(images, poses[:, 1], flips[0], flips[1])
@@ -296,13 +382,18 @@ class SplitData:
 
     Holds the dataset reader and, per shard, the local indices of the split's datapoints in it;
     `batches` streams them. `max_datapoints` keeps a random subset (drawn with `subset_rng`) for
-    quick runs.
+    quick runs. `image_channels` 2 also reads the context thumbnails (InputError if the dataset's
+    shards of the split do not store them).
     """
 
     def __init__(self, directory: str | Path, kind: str, part: str, *, max_datapoints: int | None = None,
-                 subset_rng: np.random.Generator | None = None, reader: DatasetReader | None = None):
+                 subset_rng: np.random.Generator | None = None, reader: DatasetReader | None = None,
+                 image_channels: int = 1):
+        if image_channels not in (1, 2):
+            raise InputError(f"image_channels {image_channels!r}: must be 1 (grasp thumbnail) or 2 (grasp, context)")
         self.reader = reader or DatasetReader(directory)
         self.kind, self.part = kind, part
+        self.image_fields = IMAGE_FIELDS[:image_channels]
         indices = np.unique(read_split(directory, kind, part))
         if max_datapoints is not None and len(indices) > max_datapoints:
             rng = subset_rng or np.random.default_rng(0)
@@ -321,6 +412,11 @@ class SplitData:
                                  f"shard {shard}, which is missing or smaller (dataset incomplete?)")
             self._local[shard] = local.astype(np.int64)
         self.num_datapoints = int(len(indices))
+        for name in self.image_fields:
+            if not self.reader.has_field(name, self.shards):
+                raise InputError(f"dataset '{self.reader.directory}': has no field '{name}' (written before "
+                                 "suctionbench stored it); this network reads it: regenerate the dataset, or "
+                                 "train a one-channel architecture (dn3, compact)")
 
     @property
     def shards(self) -> list[int]:
@@ -328,11 +424,11 @@ class SplitData:
         return sorted(self._local)
 
     def load_shard(self, shard: int) -> Batch:
-        """The split's datapoints of one shard, in index order."""
-        arrays = self.reader.shard(shard, fields=[IMAGE_FIELD, POSE_FIELD, METRIC_FIELD])
+        """The split's datapoints of one shard, in index order; images (n, C, 32, 32)."""
+        arrays = self.reader.shard(shard, fields=[*self.image_fields, POSE_FIELD, METRIC_FIELD])
         local = self._local[shard]
-        return Batch(arrays[IMAGE_FIELD][local, ..., 0], arrays[POSE_FIELD][local][:, list(POSE_COLUMNS)],
-                     arrays[METRIC_FIELD][local])
+        images = np.stack([arrays[name][local, ..., 0] for name in self.image_fields], axis=1)
+        return Batch(images, arrays[POSE_FIELD][local][:, list(POSE_COLUMNS)], arrays[METRIC_FIELD][local])
 
     def _pools(self, shards: list[int], pool_size: int) -> Iterator[Batch]:
         groups = [shards[i:i + pool_size] for i in range(0, len(shards), pool_size)]
@@ -361,15 +457,16 @@ class SplitData:
             yield carry
 
     def compute_stats(self) -> NormStats:
-        """Normalisation statistics of this split in one streaming pass over its shards."""
+        """Normalisation statistics of this split in one streaming pass over its shards (per image channel)."""
         image, pose = _Moments(), _Moments()
+        channels = len(self.image_fields)
         for batch in self._pools(self.shards, 1):
-            image.add(batch.images.reshape(-1, 1))
+            image.add(np.moveaxis(batch.images, 1, -1).reshape(-1, channels))
             pose.add(batch.poses)
         if pose.n == 0:
             raise InputError(f"split '{self.kind}/{self.part}' of '{self.reader.directory}': no datapoints")
-        return NormStats(float(image.mean[0]), float(image.std()[0]), tuple(float(x) for x in pose.mean),
-                         tuple(float(x) for x in pose.std()), count=pose.n)
+        return NormStats(tuple(float(x) for x in image.mean), tuple(float(x) for x in image.std()),
+                         tuple(float(x) for x in pose.mean), tuple(float(x) for x in pose.std()), count=pose.n)
 
 
 def _concat(batches: list[Batch]) -> Batch:
@@ -383,7 +480,7 @@ def _take(batch: Batch, index: np.ndarray) -> Batch:
 
 
 def to_tensors(batch: Batch, device: torch.device | str = "cpu") -> tuple[torch.Tensor, torch.Tensor]:
-    """Images (B, 1, 32, 32) and poses (B, 2) float32 tensors on `device`, still in physical units."""
-    images = torch.from_numpy(np.ascontiguousarray(batch.images, dtype=np.float32))[:, None]
+    """Images (B, C, 32, 32) and poses (B, 2) float32 tensors on `device`, still in physical units."""
+    images = torch.from_numpy(np.ascontiguousarray(batch.images, dtype=np.float32))
     poses = torch.from_numpy(np.ascontiguousarray(batch.poses, dtype=np.float32))
     return images.to(device, non_blocking=True), poses.to(device, non_blocking=True)

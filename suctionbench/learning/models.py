@@ -187,9 +187,18 @@ _SPECS: dict[str, dict] = {
 ARCHITECTURES = tuple(_SPECS)
 """Names `build_model` accepts."""
 
-TRAINABLE_ARCHITECTURES = tuple(name for name, spec in _SPECS.items() if not spec.get("context"))
-"""Names `train` accepts: datasets store the context thumbnail (`context_ims_tf_table`), but the
-training pipeline (learning/data.py: batches, normalisation, augmentation) feeds one channel yet."""
+TRAINABLE_ARCHITECTURES = ARCHITECTURES
+"""Names `train` accepts: all of them. The context nets train on datasets that store the context
+thumbnail (`context_ims_tf_table`, written by ``suctionbench generate``); `image_channels_of` tells
+the data pipeline which fields to read."""
+
+
+def image_channels_of(arch: str) -> int:
+    """Image channels network `arch` reads: 1 (grasp thumbnail) or 2 (grasp, context); InputError
+    for an unknown name. The same as ``build_model(arch).image_channels``, without building it."""
+    if arch not in _SPECS:
+        raise InputError(f"architecture '{arch}': unknown (known: {', '.join(ARCHITECTURES)})")
+    return 2 if _SPECS[arch].get("context") else 1
 
 
 def init_weights(model: nn.Module, generator: torch.Generator | None = None) -> None:

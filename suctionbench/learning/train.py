@@ -9,6 +9,14 @@ symmetrisation augmentation (`suctionbench.learning.data`). gqcnn adds ``l2 * su
 ``base * 0.95 ** floor(examples_seen / (0.66 * num_train))``; `_StaircaseDecay` computes the same
 from the step count.
 
+Architectures. Every name in `TRAINABLE_ARCHITECTURES` trains here: dn3 and compact read the grasp
+thumbnail, the context nets (context, context-wide) the grasp and the context thumbnail
+(`suctionbench.learning.models.image_channels_of`). That channel count decides which dataset
+fields `SplitData` loads (a dataset without ``context_ims_tf_table`` is refused for the context
+nets), sizes the per-channel normalisation, and is recorded in the model card
+(``image_channels``), which `suctionbench.learning.checkpoint.load_model` checks against the
+architecture and the statistics.
+
 Determinism. Every random draw comes from generators derived from `TrainConfig.seed` through
 ``numpy.random.SeedSequence(seed).spawn``: the optional training subset, the data order (numpy),
 the weight initialisation and the augmentation (torch, CPU); nothing uses a global RNG. On the CPU
@@ -72,6 +80,7 @@ from suctionbench.learning.models import (
     build_model,
     count_macs,
     count_parameters,
+    image_channels_of,
 )
 
 PR_CURVE_NAME = "precision_recall.png"
@@ -97,7 +106,8 @@ class TrainConfig:
     """Training run settings (defaults: gqcnn's Dex-Net 3.0 recipe on the dn3 network)."""
 
     arch: str = "dn3"
-    """Network: dn3 (Dex-Net 3.0 GQ-CNN, 5.6 M parameters) or compact (36 k, CPU friendly)."""
+    """Network: dn3 (Dex-Net 3.0 GQ-CNN, 5.6 M parameters), compact (36 k, CPU friendly), or the
+    two-channel context (71 k) and context-wide (281 k), which also read the context thumbnail."""
 
     epochs: int = 25
     """Passes over the training split. gqcnn: 25."""
@@ -434,9 +444,10 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
     card = read_card(dataset_dir)
     threshold = config.label_threshold if config.label_threshold is not None else label_threshold(card)
     seq_subset, seq_shuffle, seq_init, seq_augment = np.random.SeedSequence(config.seed).spawn(4)
+    channels = image_channels_of(config.arch)  # which image fields the network reads
     train_data = SplitData(dataset_dir, config.split, "train", max_datapoints=config.max_train_datapoints,
-                           subset_rng=np.random.default_rng(seq_subset), reader=reader)
-    val_data = SplitData(dataset_dir, config.split, "val", reader=reader)
+                           subset_rng=np.random.default_rng(seq_subset), reader=reader, image_channels=channels)
+    val_data = SplitData(dataset_dir, config.split, "val", reader=reader, image_channels=channels)
     if train_data.num_datapoints == 0:
         raise InputError(f"dataset '{dataset_dir}': split {config.split} has no training datapoints")
     resume_key = _resume_key(config, card, reader, train_data, val_data)
@@ -458,6 +469,9 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
                          f"(differs in: {changed}); use another output directory or overwrite it (--overwrite)")
 
     stats = NormStats.from_dict(saved["stats"]) if saved is not None else train_data.compute_stats()
+    if stats.image_channels != channels:  # a resume key of the same arch makes this a corrupt state
+        raise InputError(f"training checkpoint '{out_dir / STATE_NAME}': normalisation statistics for "
+                         f"{stats.image_channels} image channel(s), --arch {config.arch} reads {channels}")
     optimizer = torch.optim.SGD(network.parameters(), lr=config.learning_rate, momentum=config.momentum,
                                 weight_decay=config.weight_decay)
     decay = _StaircaseDecay(config.batch_size, config.decay_epochs * train_data.num_datapoints, config.decay_rate)
@@ -469,10 +483,16 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
         session.restore(saved)
         resumed_from = session.epoch
 
+    images_input = ("(N, 32, 32) float32 depth thumbnails in metres, grasp at the centre, approach's image "
+                    "pointing down the middle column")
+    if channels == 2:
+        images_input = ("(N, 2, 32, 32) float32 depth thumbnails in metres: channel 0 the grasp thumbnail (96 px "
+                        "crop), channel 1 the context thumbnail (288 px crop, 9 x 9 block means), both with the "
+                        "grasp at the centre and the approach's image pointing down the middle column")
     base_card = {
-        "arch": config.arch, "parameters": count_parameters(network), "macs_per_grasp": count_macs(network),
-        "inputs": {"images": "(N, 32, 32) float32 depth thumbnails in metres, grasp at the centre, approach's "
-                             "image pointing down the middle column",
+        "arch": config.arch, "image_channels": channels, "parameters": count_parameters(network),
+        "macs_per_grasp": count_macs(network),
+        "inputs": {"images": images_input,
                    "poses": "(N, 2) [gripper depth (m), approach angle to the table normal (rad, >= 0)]"},
         "output": "probability that the grasp succeeds: softmax of the logits, column 1",
         "label": {"metric": METRIC_FIELD, "threshold": threshold, "positive": "metric > threshold"},

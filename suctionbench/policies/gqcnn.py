@@ -12,7 +12,10 @@ Algorithm (one `plan`)
    and turned to the approach's image direction (`extract_thumbnails`), and the pose vector is
    [gripper depth, angle between the approach and the table's downward normal] (`pose_vector`,
    with the table normal brought into the camera frame by the camera pose). One batched
-   `model.predict(thumbnails, poses)` gives each grasp's success probability.
+   `model.predict(thumbnails, poses)` gives each grasp's success probability. A model with
+   ``image_channels == 2`` (the context nets) also gets each grasp's context thumbnail
+   (`extract_context_thumbnails`, same pixel and angle, 288 px crop of 9 x 9 block means) as
+   channel 1: thumbnails (N, 2, 32, 32), as in training.
 3. `num_iters` times: take the top `elite_fraction` of the current set (ceil, at least 1), fit a
    Gaussian mixture with ceil(`gmm_component_frac` x elites) components to their pixel centres
    (u, v), the only features, standardised by the elites' mean and standard deviation (a zero
@@ -36,7 +39,8 @@ the mean log-likelihood). Every random draw comes from the generator passed to `
 is deterministic.
 
 The network is anything with `predict(images (N, 32, 32) float32 metres, poses (N, 2) float32)
--> (N,) probabilities` (duck typing); `make_policy("gqcnn")` loads one with
+-> (N,) probabilities` (duck typing), or, if its `image_channels` attribute is 2, with images
+(N, 2, 32, 32) = (grasp, context); `make_policy("gqcnn")` loads one with
 `suctionbench.learning.checkpoint.load_model`, from the shipped default model unless a model or a
 model directory is given.
 """
@@ -56,8 +60,10 @@ from suctionbench.errors import InputError
 from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, SceneCloud, scene_cloud
 from suctionbench.resources import asset_path
 from suctionbench.sensing.thumbnails import (
+    THUMBNAIL_CONTEXT,
     THUMBNAIL_GQCNN,
     ThumbnailConfig,
+    extract_context_thumbnails,
     extract_thumbnails,
     pose_vector,
     project_grasps,
@@ -69,9 +75,15 @@ DEFAULT_MODEL = ("models", "gqcnn-compact")
 
 @runtime_checkable
 class GraspQualityModel(Protocol):
-    """What the policy needs of a GQ-CNN: batched success probabilities."""
+    """What the policy needs of a GQ-CNN: batched success probabilities. An optional
+    ``image_channels`` attribute (default 1) of 2 asks for the context thumbnail as channel 1."""
 
     def predict(self, images: np.ndarray, poses: np.ndarray) -> np.ndarray: ...
+
+
+def image_channels(model: Any) -> int:
+    """Image channels `model` reads: its ``image_channels`` attribute, 1 if it has none."""
+    return int(getattr(model, "image_channels", 1))
 
 
 # --------------------------------------------------------------------------------------------------
@@ -121,6 +133,10 @@ class CEMConfig:
     thumbnail: ThumbnailConfig = THUMBNAIL_GQCNN
     """Thumbnail geometry the network was trained on (96 px crop scaled to 32 x 32)."""
 
+    context_thumbnail: ThumbnailConfig = THUMBNAIL_CONTEXT
+    """Context thumbnail geometry, used only for a model with two image channels (288 px crop,
+    9 x 9 block means, 32 x 32: what ``suctionbench generate`` stores)."""
+
     def __post_init__(self) -> None:
         for key in ("num_seed_samples", "num_gmm_samples", "gmm_max_iter", "max_resample_rounds"):
             value = getattr(self, key)
@@ -138,8 +154,9 @@ class CEMConfig:
                 raise InputError(f"CEM config: {key} = {value!r} must be a positive number")
         if not isinstance(self.sampler, SamplerConfig):
             raise InputError(f"CEM config: sampler = {self.sampler!r} must be a SamplerConfig")
-        if not isinstance(self.thumbnail, ThumbnailConfig):
-            raise InputError(f"CEM config: thumbnail = {self.thumbnail!r} must be a ThumbnailConfig")
+        for key in ("thumbnail", "context_thumbnail"):
+            if not isinstance(getattr(self, key), ThumbnailConfig):
+                raise InputError(f"CEM config: {key} = {getattr(self, key)!r} must be a ThumbnailConfig")
 
     def elite_count(self, population: int) -> int:
         """Elites kept from a round of `population` grasps: max(ceil(fraction x population), 1)."""
@@ -260,6 +277,11 @@ class LazyModel:
     def predict(self, images: np.ndarray, poses: np.ndarray) -> np.ndarray:
         return self.load().predict(images, poses)
 
+    @property
+    def image_channels(self) -> int:
+        """The loaded model's image channels (loads it)."""
+        return image_channels(self.load())
+
     def __repr__(self) -> str:
         return f"LazyModel('{self.path}')"
 
@@ -291,10 +313,17 @@ class GQCNNPolicy:
     def score(
         self, observation: Observation, cloud: SceneCloud, rows: np.ndarray, cols: np.ndarray
     ) -> dict[str, np.ndarray]:
-        """Grasps at pixels (rows, cols) with their pose vectors and predicted quality."""
+        """Grasps at pixels (rows, cols) with their pose vectors and predicted quality.
+
+        Thumbnails (N, 32, 32) for a one-channel model; for a two-channel one (N, 2, 32, 32), the
+        grasp thumbnail and the context thumbnail of the same grasp.
+        """
         pixels, points, approaches = cloud.grasps_at(rows, cols)
         _, depths, angles = project_grasps(points, approaches, cloud.intrinsics)
         thumbnails = extract_thumbnails(observation.depth, pixels, angles, self.config.thumbnail)
+        if image_channels(self.model) == 2:
+            context = extract_context_thumbnails(observation.depth, pixels, angles, self.config.context_thumbnail)
+            thumbnails = np.stack([thumbnails, context], axis=1)
         poses = pose_vector(depths, approaches, cloud.table_normal)
         q = np.asarray(self.model.predict(thumbnails, poses), dtype=float).reshape(-1)
         if q.shape != (len(rows),):

@@ -247,12 +247,14 @@ def apply_depth_noise_torch(
     prob: float = 1.0,
     *,
     gp_prob: float = 1.0,
+    field_channels: int | None = None,
 ) -> torch.Tensor:
     """Batched noise for training augmentation: a new tensor like `images` (B, C, H, W), depth in
     metres, with its own alpha and field per sample.
 
-    Each sample is noised with probability `prob`; a noised sample gets alpha * y and, with
-    probability `gp_prob`, also the field (shared by its channels). Only pixels > 0 change, and,
+    Each sample is noised with probability `prob`; a noised sample gets alpha * y (one alpha for
+    all its channels) and, with probability `gp_prob`, also the field, added to its first
+    `field_channels` channels (None: all of them, the same field). Only pixels > 0 change, and,
     as in `apply_depth_noise`, a pixel pushed to <= 0 becomes 0. gqcnn's Dex-Net 3.0 recipe is
     `prob=1.0, gp_prob=0.5` (Gamma noise on every image, the GP field on half of them).
 
@@ -281,7 +283,9 @@ def apply_depth_noise_torch(
     t_x = torch.from_numpy(np.array(m_x)).to(device=dev, dtype=dtype)
     field = t_y @ z.to(device=dev, dtype=dtype) @ t_x.T  # (B, H, W)
     field = field * (config.gp_sigma * add_gp.to(device=dev, dtype=dtype))[:, None, None]
-    noisy = alpha[:, None, None, None] * images + field[:, None]
+    field = field[:, None] if field_channels is None else \
+        field[:, None] * (torch.arange(images.shape[1], device=dev) < field_channels).to(dtype)[None, :, None, None]
+    noisy = alpha[:, None, None, None] * images + field
     valid = images > 0
     return torch.where(valid & (noisy > 0), noisy, torch.where(valid, torch.zeros_like(images), images))
 

@@ -317,6 +317,11 @@ class SealConfig:
             raise InputError(f"seal config: edge_samples = {self.edge_samples} must be >= 0")
 
 
+MIN_JERK_PEAK_ACCELERATION = 10.0 / math.sqrt(3.0)
+"""Peak of s''(u) for the min-jerk s(u) = 10 u^3 - 15 u^4 + 6 u^5: at u = (3 - sqrt 3) / 6,
+s'' = 60 u - 180 u^2 + 120 u^3 = 10 / sqrt 3 = 5.774 (a move of L in T peaks at 5.774 L / T^2)."""
+
+
 @dataclass(frozen=True)
 class PerturbationConfig:
     """The paper's environment model for robust wrench resistance ("Details of Distributions").
@@ -360,9 +365,29 @@ class PerturbationConfig:
     inertial_acceleration: float = 0.0
     """Peak acceleration a (m/s^2) of the cup while it carries the object; 0 (the paper's
     quasi-static model) leaves only gravity. With a > 0 every sample must also resist the inertial
-    load -m a of the two motions of a pick: the lift (a straight up, so the object hangs with
-    m (g + a)) and the transport (a horizontal, at an azimuth drawn per sample from the grasp's
-    keyed stream). `for_episode` sets it to the cup's peak acceleration."""
+    load of the two motions of a pick: the lift (straight up at its own peak `lift_acceleration`,
+    at most a, so the object hangs with m (g + a_lift)) and the transport (a
+    horizontal, at an azimuth drawn per sample from the grasp's keyed stream). `for_episode` sets it
+    to the cup's peak acceleration."""
+
+    lift_height: float = 0.15
+    """Height (m) of the pick's straight min-jerk lift (the episode's EpisodeConfig.lift_height): with
+    lift_time, how fast the object tips off the table into its swing (contact/arrival.py)."""
+
+    lift_time: float = 1.0
+    """Duration (s) of that lift (EpisodeConfig.lift_height / lift_speed)."""
+
+    @property
+    def lift_acceleration(self) -> float:
+        """Acceleration (m/s^2) of the lift case: the min-jerk lift's peak 5.77 lift_height /
+        lift_time^2 (0.87 m/s^2 by default; 10 / sqrt 3 = max s''), at most inertial_acceleration
+        (the cup's rated peak, which the transport reaches). 0 without an inertial load."""
+        return min(self.inertial_acceleration, MIN_JERK_PEAK_ACCELERATION * self.lift_height / self.lift_time**2)
+
+    transport_time: float = 0.9
+    """Duration (s) of the min-jerk transport, whose acceleration peaks at inertial_acceleration:
+    how fast the transport's inertial load reaches the swing (contact/arrival.py). The episode times
+    each transport by the arm's path; 0.87-1.24 s measured on five basic and typical picks."""
 
     @classmethod
     def for_episode(cls, cup: CupConfig, **kwargs: Any) -> PerturbationConfig:
@@ -373,6 +398,9 @@ class PerturbationConfig:
     def __post_init__(self) -> None:
         if self.num_samples < 1:
             raise InputError(f"perturbation config: num_samples = {self.num_samples} must be >= 1")
+        for name in ("lift_height", "lift_time", "transport_time"):
+            if not getattr(self, name) > 0.0:
+                raise InputError(f"perturbation config: {name} = {getattr(self, name)!r} must be > 0")
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
             if f.name != "num_samples" and (not math.isfinite(value) or value < 0):

@@ -18,7 +18,7 @@ from scipy.spatial.transform import Rotation
 
 from suctionbench.config import STANDARD_GRAVITY, LabelConfig, PerturbationConfig
 from suctionbench.contact import METRICS, SuctionLabeller
-from suctionbench.contact.robust import sample_perturbations
+from suctionbench.contact.robust import arrivals, sample_perturbations
 from suctionbench.contact.wrench import lip_load, resists
 from suctionbench.errors import InputError
 from suctionbench.geometry.sampling import sample_surface_grasps
@@ -126,7 +126,8 @@ def test_same_seed_same_labels_and_batch_independence(soap):
 
 def test_robust_label_is_the_composition_of_its_parts(soap):
     # rwr = mean_j [seal_j and resist_j]: recompute each sample's seal with the full (unstaged)
-    # seal model and its wrench test (on the load the bellows' swing leaves, with the vacuum that
+    # seal model and its wrench test (on the load the bellows' swing leaves as the object tips off
+    # the table, with the vacuum that
     # seal holds) separately, then compose, and compare with the fast path.
     labeller = SuctionLabeller(soap, mass=0.15)
     points, approaches = sample_surface_grasps(soap, 40, np.random.default_rng(1))
@@ -137,7 +138,9 @@ def test_robust_label_is_the_composition_of_its_parts(soap):
     )
     seal = labeller.seal_model.evaluate(samples.points, samples.frames)
     assert samples.loads.shape == (len(samples.points), 1, 3)  # no inertial load by default
-    wrench = lip_load(samples.force, samples.com, seal.ring_centre, samples.frames, labeller.config.cup)
+    (lift,) = arrivals(labeller.object, labeller.config.perturbation, labeller.config.cup, samples.force,
+                       samples.inertial)  # the lift-off is the only load case
+    wrench = lip_load(samples.force, samples.com, seal.ring_centre, samples.frames, labeller.config.cup, lift)
     resisted = resists(wrench, samples.friction, labeller.config.cup, seal.vacuum_force, seal.lip_heights)
     composed = (seal.seal & resisted).reshape(outcomes.shape)
     np.testing.assert_array_equal(outcomes, composed)

@@ -10,7 +10,7 @@ import trimesh
 
 from suctionbench.config import STANDARD_GRAVITY, LabelConfig
 from suctionbench.contact.metrics import METRICS, GraspLabels
-from suctionbench.contact.robust import ObjectState, inertial_forces, robust_wrench_resistance
+from suctionbench.contact.robust import ObjectState, arrivals, inertial_forces, robust_wrench_resistance
 from suctionbench.contact.seal import SealModel, SealResult
 from suctionbench.contact.wrench import lip_load, resists
 from suctionbench.errors import InputError
@@ -52,7 +52,9 @@ class SuctionLabeller:
         gravity = np.asarray(gravity, dtype=float)
         if gravity.shape != (3,) or not np.all(np.isfinite(gravity)):
             raise InputError(f"gravity {gravity.tolist()!r}: must be three finite numbers")
-        self.object = ObjectState(com=com, mass=float(mass), gravity=gravity)
+        self.object = ObjectState(com=com, mass=float(mass), gravity=gravity,
+                                  inertia=_inertia_about(self.info.mesh, float(mass), com),
+                                  support=np.asarray(self.info.mesh.convex_hull.vertices, dtype=float))
         self.caster = RayCaster(self.info.mesh)
         self.seal_model = SealModel(self.caster, self.config.cup, self.config.seal)
 
@@ -85,11 +87,14 @@ class SuctionLabeller:
         accel = self.config.perturbation.inertial_acceleration
         if accel > 0.0:
             azimuths = np.broadcast_to(NOMINAL_TRANSPORT_AZIMUTHS, (len(points), len(NOMINAL_TRANSPORT_AZIMUTHS)))
-            loads = weight[:, None, :] + inertial_forces(self.object.mass, self.object.gravity, accel, frames, azimuths)
+            loads = weight[:, None, :] + inertial_forces(self.object.mass, self.object.gravity, accel, frames, azimuths,
+                                                         self.config.perturbation.lift_acceleration)
         com = np.broadcast_to(self.object.com, points.shape)
+        cases = arrivals(self.object, self.config.perturbation, self.config.cup, weight, loads - weight[:, None, :])
         ok = seal.seal.copy()
         for case in range(loads.shape[1]):
-            wrench = lip_load(loads[:, case], com, seal.ring_centre, frames, self.config.cup)
+            arrival = None if cases is None else cases[case]
+            wrench = lip_load(loads[:, case], com, seal.ring_centre, frames, self.config.cup, arrival)
             ok &= resists(wrench, self.config.cup.friction, self.config.cup, seal.vacuum_force, seal.lip_heights)
         return ok
 
@@ -140,6 +145,16 @@ class SuctionLabeller:
             com=self.object.com,
             config=self.config,
         )
+
+
+def _inertia_about(mesh: trimesh.Trimesh, mass: float, com: np.ndarray) -> np.ndarray:
+    """(3, 3) inertia tensor (kg m^2) about `com` of the mesh's solid at uniform density weighing
+    `mass`: trimesh's tensor about the solid's own centroid, scaled to the mass and moved to `com`
+    by the parallel-axis theorem (an object whose centre of mass is modelled off the centroid, a
+    full bottle, keeps its shape's spread of mass: an approximation)."""
+    own = np.asarray(mesh.moment_inertia, dtype=float) * (mass / float(mesh.mass))
+    d = np.asarray(mesh.center_mass, dtype=float) - com
+    return own + mass * (float(d @ d) * np.eye(3) - np.outer(d, d))
 
 
 def _check_grasps(points: np.ndarray, approaches: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

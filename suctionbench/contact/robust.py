@@ -13,13 +13,16 @@ Inertial load (PerturbationConfig.inertial_acceleration = a > 0). The paper's mo
 quasi-static; a pick episode is not: the cup accelerates the object at up to a (3.1 m/s^2 for the
 default cup's episode), and in the cup's frame the object then feels the d'Alembert force -m a_cup
 on top of its weight. The two motions of a pick point it two ways, and a grasp must survive both:
-the lift (a_cup straight up, so the object hangs with m (g + a)) and the transport (a_cup
+the lift (a_cup straight up at the lift's own peak, PerturbationConfig.lift_acceleration <= a, so
+the object hangs with m (g + a_lift)) and the transport (a_cup
 horizontal, direction unknown when labelling: its azimuth round the vertical is drawn uniformly per
 sample from the grasp's keyed stream, after the paper's 19 draws so that a = 0 reproduces the
 paper's labels bit for bit). A sample resists iff it resists every load case. The static weight
 needs no case of its own: it lies on the segment between the zero wrench and the lift case, and
 the set of resisted wrenches is convex. The azimuth is measured from the nominal contact frame's x
-axis projected on the horizontal, so labels stay invariant under rigid motions.
+axis projected on the horizontal, so labels stay invariant under rigid motions. How each load
+reaches the swinging cup (the lift-off, the transport's rising acceleration) follows from the
+object's inertia and support (`ObjectState`) and the pick's motion: contact/arrival.py.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ import numpy as np
 from scipy.special import ndtr, ndtri
 
 from suctionbench.config import CupConfig, PerturbationConfig
+from suctionbench.contact.arrival import Arrival, table_support
 from suctionbench.contact.seal import SealModel
 from suctionbench.contact.wrench import lip_load, resists, resists_qp
 from suctionbench.geometry.frames import so3_exp
@@ -51,6 +55,14 @@ class ObjectState:
 
     gravity: np.ndarray
     """(3,) gravitational acceleration in the mesh frame (m/s^2), e.g. (0, 0, -9.81)."""
+
+    inertia: np.ndarray | None = None
+    """(3, 3) inertia tensor about the centre of mass (kg m^2), mesh frame. With `support`, the swing
+    follows the pick's arrivals (contact/arrival.py); without, the step bound."""
+
+    support: np.ndarray | None = None
+    """(H, 3) convex hull vertices (m), mesh frame: those lowest along `gravity` are what the object
+    stands on."""
 
     @property
     def gravity_force(self) -> np.ndarray:
@@ -89,12 +101,32 @@ class GraspSamples:
         return self.force[:, None, :] + self.inertial
 
 
+def arrivals(obj: ObjectState, config: PerturbationConfig, cup: CupConfig, weight: np.ndarray,
+             inertial: np.ndarray) -> list[Arrival] | None:
+    """One `Arrival` per load case for rows of weight (N, 3) and inertial forces (N, L, 3) (lift,
+    then transports; L = 0: the lift with the weight alone), or None where the object's inertia or
+    support is unknown (the step bound)."""
+    if obj.inertia is None or obj.support is None:
+        return None
+    count = max(inertial.shape[1], 1)
+    nan = np.full_like(weight, np.nan)
+    support = table_support(np.asarray(obj.support, dtype=float), obj.gravity)
+    return [
+        Arrival(weight, nan if case == 0 else inertial[:, case], np.asarray(obj.inertia, dtype=float), obj.mass,
+                support, config.lift_height, config.lift_time,
+                config.transport_time, cup.axial_stiffness, 0.5 * cup.bellows_loss_factor)
+        for case in range(count)
+    ]
+
+
 def inertial_forces(
-    mass: float, gravity: np.ndarray, acceleration: float, frames: np.ndarray, azimuths: np.ndarray
+    mass: float, gravity: np.ndarray, acceleration: float, frames: np.ndarray, azimuths: np.ndarray,
+    lift_acceleration: float | None = None,
 ) -> np.ndarray:
     """(N, 1 + A, 3) inertial forces -m a_cup of a pick's motions, in the mesh frame: the lift
-    (a_cup = a straight up: m a along gravity) and one transport per azimuth in `azimuths` (N, A)
-    (a_cup = a horizontal, at that angle round the vertical from the contact frame's x axis)."""
+    (a_cup = `lift_acceleration` straight up, `acceleration` if None: m a along gravity) and one
+    transport per azimuth in `azimuths` (N, A) (a_cup = a horizontal, at that angle round the
+    vertical from the contact frame's x axis)."""
     gravity = np.asarray(gravity, dtype=float)
     norm = float(np.linalg.norm(gravity))
     count = len(frames)
@@ -105,7 +137,7 @@ def inertial_forces(
     h0 = ref / np.linalg.norm(ref, axis=1, keepdims=True)
     h1 = np.cross(down, h0)
     horizontal = np.cos(azimuths)[..., None] * h0[:, None] + np.sin(azimuths)[..., None] * h1[:, None]
-    lift = (mass * acceleration) * down[:, None, :]
+    lift = (mass * (acceleration if lift_acceleration is None else lift_acceleration)) * down[:, None, :]
     return np.concatenate([lift, -(mass * acceleration) * horizontal], axis=1)
 
 
@@ -162,7 +194,8 @@ def sample_perturbations(
         noise[:, :, 18], cup.friction, config.friction_std, config.friction_min, config.friction_max
     )
     if inertial:  # (N, J, 2, 3): lift and transport, rotated into the perturbed object frame
-        cases = inertial_forces(obj.mass, obj.gravity, config.inertial_acceleration, frames, azimuth)
+        cases = inertial_forces(obj.mass, obj.gravity, config.inertial_acceleration, frames, azimuth,
+                                config.lift_acceleration)
         lift = np.broadcast_to(cases[:, None, 0], (count, j, 3))
         cases = np.stack([lift, cases[:, 1:]], axis=2)
         extra = np.einsum("nsij,nskj->nski", inv, cases).reshape(-1, 2, 3)
@@ -178,18 +211,21 @@ def sample_perturbations(
     )
 
 
-def evaluate_samples(seal: SealModel, samples: GraspSamples) -> np.ndarray:
-    """Fast path: bool (N*J,) seal-and-resist per sample, staged so rays are cast only where needed."""
+def evaluate_samples(seal: SealModel, samples: GraspSamples, cases: list[Arrival] | None = None) -> np.ndarray:
+    """Fast path: bool (N*J,) seal-and-resist per sample, staged so rays are cast only where needed.
+    `cases`: each load case's arrival (`arrivals`), None for the step bound."""
     out = np.zeros(len(samples.points), dtype=bool)
     cup = seal.cup
     for start in range(0, len(out), CHUNK_SAMPLES):
         sl = slice(start, start + CHUNK_SAMPLES)
-        gate = _wrench_gate(samples.loads[sl], samples.com[sl], samples.frames[sl], samples.friction[sl], cup)
+        chunk = None if cases is None else [case.take(np.arange(len(out))[sl]) for case in cases]
+        gate = _wrench_gate(samples.loads[sl], samples.com[sl], samples.frames[sl], samples.friction[sl], cup, chunk)
         out[sl] = seal.evaluate(samples.points[sl], samples.frames[sl], gate=gate)
     return out
 
 
-def _wrench_gate(loads: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.ndarray, cup: CupConfig):
+def _wrench_gate(loads: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.ndarray, cup: CupConfig,
+                 cases: list[Arrival] | None = None):
     """The closed-form wrench test of every load case as a seal-model gate: it only needs the ring
     centres, the vacuum force and the lip's profile. The seal model asks twice (seal.Gate) with
     the same ring centres, so each sample's swung wrench is computed once and kept."""
@@ -203,7 +239,8 @@ def _wrench_gate(loads: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.
         new = ~known[idx]
         todo, at = idx[new], centres[new]
         for case in range(loads.shape[1]):
-            wrenches[todo, case] = lip_load(loads[todo, case], com[todo], at, frames[todo], cup)
+            arrival = None if cases is None else cases[case].take(todo)
+            wrenches[todo, case] = lip_load(loads[todo, case], com[todo], at, frames[todo], cup, arrival)
         known[todo] = True
         ok = np.ones(len(idx), dtype=bool)
         for case in range(loads.shape[1]):
@@ -213,7 +250,8 @@ def _wrench_gate(loads: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.
     return gate
 
 
-def evaluate_samples_reference(seal: SealModel, samples: GraspSamples) -> np.ndarray:
+def evaluate_samples_reference(seal: SealModel, samples: GraspSamples, cases: list[Arrival] | None = None
+                               ) -> np.ndarray:
     """Reference path: per sample, one full seal evaluation and one cone program per load case,
     in a Python loop."""
     out = np.zeros(len(samples.points), dtype=bool)
@@ -223,9 +261,11 @@ def evaluate_samples_reference(seal: SealModel, samples: GraspSamples) -> np.nda
         if not result.seal[0]:
             continue
         centre, frame = result.ring_centre[0], samples.frames[i]
-        wrenches = lip_load(loads[i], np.broadcast_to(samples.com[i], loads[i].shape),
-                            np.broadcast_to(centre, loads[i].shape),
-                            np.broadcast_to(frame, (len(loads[i]), 3, 3)), seal.cup)
+        wrenches = np.concatenate([
+            lip_load(loads[i, case][None], samples.com[i][None], centre[None], frame[None], seal.cup,
+                     None if cases is None else cases[case].take(np.array([i])))
+            for case in range(loads.shape[1])
+        ])
         out[i] = all(
             resists_qp(
                 None, None, centre, frame, float(samples.friction[i]),
@@ -264,7 +304,8 @@ def robust_wrench_resistance(
     for start in range(0, count, step):
         sl = slice(start, start + step)
         samples = sample_perturbations(points[sl], frames[sl], obj, seal.cup, config, seed, ids[sl])
-        outcomes[sl] = run(seal, samples).reshape(-1, j)
+        cases = arrivals(obj, config, seal.cup, samples.force, samples.inertial)
+        outcomes[sl] = run(seal, samples, cases).reshape(-1, j)
         if progress is not None:
             progress(len(samples.points) // j)
     return outcomes.mean(axis=1), outcomes

@@ -74,6 +74,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from suctionbench.config import CupConfig
+from suctionbench.contact.arrival import Arrival, quarter_swing_share, response_factor
 
 SQRT2, SQRT3 = math.sqrt(2.0), math.sqrt(3.0)
 
@@ -169,14 +170,19 @@ class _Swing:
     """
 
     def __init__(self, force: np.ndarray, com: np.ndarray, ring_centre: np.ndarray, frames: np.ndarray,
-                 cup: CupConfig):
+                 cup: CupConfig, axis: np.ndarray | None = None):
         self.f = np.einsum("nji,nj->ni", frames, force)
         self.r = np.einsum("nji,nj->ni", frames, np.asarray(com, dtype=float) - ring_centre)
         tau = np.cross(self.r, self.f)
-        self.a = np.hypot(tau[:, 0], tau[:, 1])
-        self.tips = self.a > 1e-15
-        self.n = np.zeros_like(self.f)
-        self.n[self.tips, :2] = tau[self.tips, :2] / self.a[self.tips, None]
+        if axis is None:  # the load's own tilt axis
+            self.a = np.hypot(tau[:, 0], tau[:, 1])
+            self.tips = self.a > 1e-15
+            self.n = np.zeros_like(self.f)
+            self.n[self.tips, :2] = tau[self.tips, :2] / self.a[self.tips, None]
+        else:  # another load's axis (in the cup plane): this load's moment about it, tilting the other way if < 0
+            self.n = np.asarray(axis, dtype=float)
+            self.a = np.einsum("ni,ni->n", tau, self.n)
+            self.tips = self.a > 1e-15
         self.n_f = np.einsum("ni,ni->n", self.n, self.f)
         self.b = np.einsum("ni,ni->n", self.r, self.f) - self.n_f * np.einsum("ni,ni->n", self.n, self.r)
         self.k, self.k_lip, self.theta_max = cup.bending_stiffness, cup.lip_tilt_stiffness, cup.approach_tolerance
@@ -214,6 +220,12 @@ class _Swing:
         c, s = np.cos(phi)[:, None], np.sin(phi)[:, None]
         return self.f * c - np.cross(self.n, self.f) * s + self.n * self.n_f[:, None] * (1.0 - c)
 
+    def stiffness(self, phi: np.ndarray) -> np.ndarray:
+        """The swing's stiffness at phi, -d moment / d phi: the cup's return rate (k_s below the
+        stop, k_c beyond) plus the pendulum's A sin(phi) + B cos(phi)."""
+        rate = np.where(phi <= self.phi_stop, self.k_series, self.k_caught)
+        return rate + self.a * np.sin(phi) + self.b * np.cos(phi)
+
     def static_tilt(self) -> np.ndarray:
         """Equilibrium tilt: moment(phi) = 0 on [0, SWING_CAP] (SWING_CAP if none)."""
         cap = np.full_like(self.a, SWING_CAP)
@@ -232,7 +244,8 @@ def _bisect(fn, low: np.ndarray, high: np.ndarray) -> np.ndarray:
 
 
 def lip_load(
-    force: np.ndarray, com: np.ndarray, ring_centre: np.ndarray, frames: np.ndarray, cup: CupConfig
+    force: np.ndarray, com: np.ndarray, ring_centre: np.ndarray, frames: np.ndarray, cup: CupConfig,
+    arrival: Arrival | None = None,
 ) -> np.ndarray:
     """The wrench (N, 6) the lip must carry (external wrench about the ring centre, contact frame,
     as `resists` takes it) for a load `force` (N, 3) at `com`.
@@ -243,11 +256,13 @@ def lip_load(
     The swing's first turning point (default). The load does not arrive slowly: it meets the lip
     as the object tips off the table (a brick's tilt built up over ~0.2 s in the simulation) and as
     the transport's acceleration rises (~0.2 s), about one swing period (0.2-0.65 s for the basic
-    objects above 0.15 kg). Whatever the load's history, as long as it grows from zero without
-    reversing, an undamped spring-mass system swings furthest when the whole load comes at once
-    (the step is the bound; a dynamic amplification of 2 for a linear spring); the labeller does
-    not know the motion's timing, so it takes the bound. From rest at phi = 0 the swing turns
-    where the load's work equals the cup's stored energy (energy conservation, `_Swing.work`):
+    objects above 0.15 kg). With `arrival` (the pick's motion and the object's inertia and support,
+    contact/arrival.py) the swing follows the two arrivals: from the lift-off's speed, or from rest
+    at the weight's tilt as the transport's acceleration rises. Without it, the bound: whatever the
+    load's history, as long as it grows from zero without reversing, an undamped spring-mass system
+    swings furthest when the whole load comes at once (a dynamic amplification of 2 for a linear
+    spring). From rest at phi = 0 the swing then turns where the load's work equals the cup's
+    stored energy (energy conservation, `_Swing.work`):
 
         A sin(phi_u) + B (cos(phi_u) - 1) = int_0^phi_u R,
 
@@ -280,10 +295,11 @@ def lip_load(
         return external_wrench_at_contact(force, com, ring_centre, frames)
     swing = _Swing(force, com, ring_centre, frames, cup)
     phi_p = swing.static_tilt()  # the static swing: the formula below with nothing unbalanced
-    if cup.swing_overshoot:
+    if cup.swing_overshoot and arrival is not None:
+        phi_p = np.where(swing.tips, _arrived_tilt(swing, phi_p, arrival, com, ring_centre, frames, cup), 0.0)
+    elif cup.swing_overshoot:
         phi_s, share = phi_p, cup.swing_overshoot_fraction
-        cap = np.full_like(phi_s, SWING_CAP)
-        phi_u = np.where(swing.work(cap) > 0.0, cap, _bisect(swing.work, phi_s, cap))
+        phi_u = _turning_tilt(swing.work, phi_s)
         phi_p = np.where(swing.tips, phi_s + share * (phi_u - phi_s), 0.0)
     f = swing.turned(phi_p)
     torque = np.cross(swing.r, f)
@@ -292,6 +308,51 @@ def lip_load(
     arm2 = np.einsum("ni,ni->n", arm, arm)
     spin = np.where(arm2 > 1e-12, unbalanced / np.maximum(arm2, 1e-12), 0.0)[:, None]  # m alpha
     return np.concatenate([f - spin * arm, torque - spin * np.cross(swing.r, arm)], axis=1)
+
+
+def _turning_tilt(energy, phi_s: np.ndarray) -> np.ndarray:
+    """Where the swing's kinetic energy `energy(phi)` (positive at phi_s, falling beyond it) runs
+    out on [phi_s, SWING_CAP] (SWING_CAP if it never does)."""
+    cap = np.full_like(phi_s, SWING_CAP)
+    return np.where(energy(cap) > 0.0, cap, _bisect(energy, phi_s, cap))
+
+
+def _lift_turn(swing: _Swing, phi_s: np.ndarray, arrival: Arrival, com: np.ndarray, ring_centre: np.ndarray,
+               frames: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The swing's first turning point after the lift-off (contact/arrival.py), less the
+    silicone's loss over that quarter swing; with the moment of inertia about n and the lift-off's
+    time into the lift."""
+    inertia = arrival.inertia_about(swing.n, swing.r, frames)
+    rate, time = arrival.lift_off(swing.n, phi_s, ring_centre, com, frames)
+    start = swing.work(phi_s) - 0.5 * inertia * rate * rate
+    turn = _turning_tilt(lambda p: swing.work(p) - start, phi_s)
+    return phi_s + quarter_swing_share(arrival.zeta) * (turn - phi_s), inertia, time
+
+
+def _arrived_tilt(swing: _Swing, phi_s: np.ndarray, arrival: Arrival, com: np.ndarray, ring_centre: np.ndarray,
+                  frames: np.ndarray, cup: CupConfig) -> np.ndarray:
+    """The swing's first turning point for the pick's arrivals (contact/arrival.py): a lift row
+    leaves the table at phi_s turning at the lift-off's rate; a transport row starts at the
+    weight's tilt, the inertial load arriving with the transport's response factor, on top of what
+    is left of the lift's swing."""
+    com = np.broadcast_to(np.asarray(com, dtype=float), swing.f.shape)
+    lift, inertia, _ = _lift_turn(swing, phi_s, arrival, com, ring_centre, frames)
+    transport = arrival.is_transport
+    if not transport.any():
+        return lift
+    still = _Swing(arrival.weight, com, ring_centre, frames, cup, axis=swing.n).static_tilt()
+    rest = swing.work(still)
+    step = _turning_tilt(lambda p: swing.work(p) - rest, phi_s)  # the step's turning point from phi_0
+    period = 2.0 * np.pi * np.sqrt(inertia / np.maximum(swing.stiffness(phi_s), 1e-12))
+    factor = response_factor(arrival.transport_time / np.maximum(period, 1e-12), arrival.zeta)
+    carried = np.where(still < phi_s, phi_s + (factor - 1.0) * (step - phi_s), phi_s)
+    hanging = _Swing(arrival.weight, com, ring_centre, frames, cup)
+    hang = hanging.static_tilt()
+    peak, hang_inertia, lifted_at = _lift_turn(hanging, hang, arrival, com, ring_centre, frames)
+    omega = np.sqrt(hanging.stiffness(hang) / np.maximum(hang_inertia, 1e-15))
+    ringing = (peak - hang) * np.exp(-arrival.zeta * omega * (arrival.lift_time - lifted_at))
+    ringing *= np.abs(np.einsum("ni,ni->n", hanging.n, swing.n))
+    return np.where(transport, carried + np.where(hanging.tips, ringing, 0.0), lift)
 
 
 def lip_angles(count: int) -> np.ndarray:

@@ -46,6 +46,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import ConvexHull, QhullError
 
 from suctionbench.config import MIN_JERK_PEAK_ACCELERATION
 
@@ -122,9 +123,19 @@ def response_factor(ratio: np.ndarray, zeta: float) -> np.ndarray:
 
 def table_support(hull: np.ndarray, gravity: np.ndarray) -> np.ndarray:
     """The hull vertices (H, 3) within SUPPORT_TOLERANCE of the lowest along `gravity` (3,): what the
-    object stands on."""
-    depth = hull @ (np.asarray(gravity, dtype=float) / max(float(np.linalg.norm(gravity)), 1e-12))
-    return hull[depth >= depth.max() - SUPPORT_TOLERANCE]
+    object stands on; only the corners of their outline seen along gravity (the pivot, an extreme
+    point in a horizontal direction, is one of them: a rounded bar's hundreds of bottom vertices
+    become a few dozen)."""
+    down = np.asarray(gravity, dtype=float) / max(float(np.linalg.norm(gravity)), 1e-12)
+    depth = hull @ down
+    support = hull[depth >= depth.max() - SUPPORT_TOLERANCE]
+    if len(support) < 4:
+        return support
+    across = np.linalg.svd(np.eye(3) - np.outer(down, down))[0][:, :2]  # a basis of the horizontal
+    try:
+        return support[ConvexHull(support @ across).vertices]
+    except QhullError:  # collinear (a cylinder on its side): every point is an extreme candidate
+        return support
 
 
 @dataclass(frozen=True)
@@ -194,8 +205,8 @@ class Arrival:
         offset = offset - np.einsum("ni,ni->n", offset, down)[:, None] * down
         reach = np.linalg.norm(offset, axis=1)
         towards = offset / np.maximum(reach, 1e-12)[:, None]
-        ahead = np.einsum("hi,ni->hn", self.support, towards) - np.einsum("ni,ni->n", ring_centre, towards)
-        lever = np.maximum(ahead.max(axis=0), 1e-3)  # a grasp above its pivot: the object lifts off at once
+        ahead = (towards @ self.support.T).max(axis=1) - np.einsum("ni,ni->n", ring_centre, towards)
+        lever = np.maximum(ahead, 1e-3)  # a grasp above its pivot: the object lifts off at once
         risen = weight / self.axial_stiffness + lever * np.sin(phi_s)
         speed = min_jerk_speed(risen, self.lift_height, self.lift_time)
         pivot_axis = np.einsum("nji,nj->ni", frames, np.cross(down, towards))

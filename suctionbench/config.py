@@ -124,8 +124,10 @@ class CupConfig:
     swing_overshoot: bool = True
     """The load reaches the bellows within about one swing period (the object tips off the table,
     the transport starts), and a lightly damped swing then overshoots its equilibrium: the labeller
-    judges the lip at the swing's first turning point for a load applied at once, the bound
-    (contact/wrench.py, `lip_load`). False: at the static equilibrium (the load applied slowly)."""
+    judges the lip at the swing's first turning point, following the pick's motion where the
+    object's inertia and support are known (contact/arrival.py), else for a load applied at once,
+    the bound (contact/wrench.py, `lip_load`). False: at the static equilibrium (the load applied
+    slowly)."""
 
     bellows_loss_factor: float = 0.1
     """Loss factor eta (tan delta) of the bellows' silicone: the energy a bending cycle dissipates

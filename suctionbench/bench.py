@@ -290,7 +290,9 @@ class _Unbatched:
     @property
     def image_channels(self) -> int:
         """The wrapped model's (the policy cuts the context thumbnail for a two-channel model)."""
-        return int(getattr(self.model, "image_channels", 1))
+        from suctionbench.policies.gqcnn import image_channels
+
+        return image_channels(self.model)
 
     def predict(self, images: np.ndarray, poses: np.ndarray) -> np.ndarray:
         return np.concatenate([self.model.predict(images[i : i + 1], poses[i : i + 1]) for i in range(len(images))])

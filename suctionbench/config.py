@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from suctionbench import minjerk
 from suctionbench.errors import InputError
 
 
@@ -219,11 +220,16 @@ class CupConfig:
         return 0.5 * self.lip_rate * self.radius**2
 
     @property
+    def swing_damping_ratio(self) -> float:
+        """Damping ratio zeta of the bellows' swing: the silicone's loss factor / 2 (0.05)."""
+        return 0.5 * self.bellows_loss_factor
+
+    @property
     def swing_overshoot_fraction(self) -> float:
         """How much of an undamped swing's overshoot survives the bellows' damping: a step load on
-        a spring-mass system of damping ratio zeta = eta / 2 overshoots its equilibrium by
-        exp(-pi zeta / sqrt(1 - zeta^2)) of the undamped overshoot (0.855 at eta = 0.1)."""
-        zeta = 0.5 * self.bellows_loss_factor
+        a spring-mass system of damping ratio zeta (`swing_damping_ratio`) overshoots its
+        equilibrium by exp(-pi zeta / sqrt(1 - zeta^2)) of the undamped overshoot (0.855 at eta = 0.1)."""
+        zeta = self.swing_damping_ratio
         return math.exp(-math.pi * zeta / math.sqrt(1.0 - zeta * zeta))
 
     @property
@@ -319,11 +325,6 @@ class SealConfig:
             raise InputError(f"seal config: edge_samples = {self.edge_samples} must be >= 0")
 
 
-MIN_JERK_PEAK_ACCELERATION = 10.0 / math.sqrt(3.0)
-"""Peak of s''(u) for the min-jerk s(u) = 10 u^3 - 15 u^4 + 6 u^5: at u = (3 - sqrt 3) / 6,
-s'' = 60 u - 180 u^2 + 120 u^3 = 10 / sqrt 3 = 5.774 (a move of L in T peaks at 5.774 L / T^2)."""
-
-
 @dataclass(frozen=True)
 class PerturbationConfig:
     """The paper's environment model for robust wrench resistance ("Details of Distributions").
@@ -379,17 +380,17 @@ class PerturbationConfig:
     lift_time: float = 1.0
     """Duration (s) of that lift (EpisodeConfig.lift_height / lift_speed)."""
 
+    transport_time: float = 0.9
+    """Duration (s) of the min-jerk transport, whose acceleration peaks at inertial_acceleration:
+    how fast the transport's inertial load reaches the swing (contact/arrival.py). The episode times
+    each transport by the arm's path; 0.87-1.24 s measured on five basic and typical picks."""
+
     @property
     def lift_acceleration(self) -> float:
         """Acceleration (m/s^2) of the lift case: the min-jerk lift's peak 5.77 lift_height /
         lift_time^2 (0.87 m/s^2 by default; 10 / sqrt 3 = max s''), at most inertial_acceleration
         (the cup's rated peak, which the transport reaches). 0 without an inertial load."""
-        return min(self.inertial_acceleration, MIN_JERK_PEAK_ACCELERATION * self.lift_height / self.lift_time**2)
-
-    transport_time: float = 0.9
-    """Duration (s) of the min-jerk transport, whose acceleration peaks at inertial_acceleration:
-    how fast the transport's inertial load reaches the swing (contact/arrival.py). The episode times
-    each transport by the arm's path; 0.87-1.24 s measured on five basic and typical picks."""
+        return min(self.inertial_acceleration, minjerk.PEAK_ACCELERATION * self.lift_height / self.lift_time**2)
 
     @classmethod
     def for_episode(cls, cup: CupConfig, **kwargs: Any) -> PerturbationConfig:

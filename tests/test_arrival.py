@@ -77,9 +77,7 @@ def _bar_arrival(mass, length, weight, transport=None):
     """A uniform bar along x (length, 1 cm square), lying on the table, as one Arrival row."""
     inertia = np.diag([mass * 2e-4 / 12, mass * (length**2 + 1e-4) / 12, mass * (length**2 + 1e-4) / 12])
     support = np.array([[x, y, -0.005] for x in (-length / 2, length / 2) for y in (-0.005, 0.005)])
-    nan = np.full((1, 3), np.nan)
-    return Arrival(weight, nan if transport is None else transport, inertia, mass, support, 0.15, 1.0, 0.9,
-                   CUP_DEFAULT.axial_stiffness, 0.0)
+    return Arrival(weight, transport, inertia, mass, support, 0.15, 1.0, 0.9, CUP_DEFAULT.axial_stiffness, 0.0)
 
 
 def test_lift_off_rate_and_turning_point_of_a_bar():

@@ -34,13 +34,15 @@ loss exp(-zeta omega (T_lift - t_off)) over the rest of the lift (omega the hang
 frequency, t_off the lift-off's time), and turned onto the transport's tilt axis, adds to the
 transport's peak (in the worst phase: the transport's start is not timed to the swing).
 
-Left out: the lift's own acceleration profile (the lift case keeps the rated acceleration as a
-static bound), a pivot that slides instead of turning, and a transport whose load turns the tilt
-axis (the swing keeps the axis of the full load's moment).
+Left out: the lift's own acceleration profile (the lift case takes its peak,
+PerturbationConfig.lift_acceleration, as a static load from the start), a pivot that slides instead
+of turning, and a transport whose load turns the tilt axis (the swing keeps the axis of the full
+load's moment).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass
@@ -48,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from suctionbench.config import MIN_JERK_PEAK_ACCELERATION
+from suctionbench import minjerk
 
 SUPPORT_TOLERANCE = 1e-3
 """Hull vertices within this height (m) of the lowest, along the labelled pose's gravity, are on the
@@ -63,23 +65,10 @@ RESIDUAL_PERIODS = 1.5
 it: the hold over the bin), where the peak may still come."""
 
 
-def min_jerk_progress(height: np.ndarray, total: float) -> np.ndarray:
-    """The time fraction u at which a min-jerk move of `total` metres has covered `height` (clipped
-    to [0, total]): s(u) = 10 u^3 - 15 u^4 + 6 u^5 = height / total, by bisection (s is monotone)."""
-    target = np.clip(np.asarray(height, dtype=float) / total, 0.0, 1.0)
-    low, high = np.zeros_like(target), np.ones_like(target)
-    for _ in range(40):
-        mid = 0.5 * (low + high)
-        below = mid**3 * (10.0 - 15.0 * mid + 6.0 * mid * mid) < target
-        low, high = np.where(below, mid, low), np.where(below, high, mid)
-    return 0.5 * (low + high)
-
-
 def min_jerk_speed(height: np.ndarray, total: float, duration: float) -> np.ndarray:
     """Tool speed (m/s) of a min-jerk move of `total` metres over `duration` s once it has covered
-    `height`: v = (total / duration) 30 u^2 (1 - u)^2 at u = `min_jerk_progress` (0 at both ends)."""
-    u = min_jerk_progress(height, total)
-    return (total / duration) * 30.0 * u * u * (1.0 - u) ** 2
+    `height` (clipped to [0, total]; 0 at both ends)."""
+    return (total / duration) * minjerk.speed(minjerk.progress(np.asarray(height, dtype=float) / total))
 
 
 def quarter_swing_share(zeta: float) -> float:
@@ -106,7 +95,7 @@ def _response_table(zeta: float) -> np.ndarray:
     x, v, peak = np.zeros_like(dt), np.zeros_like(dt), np.zeros_like(dt)
     for k in range(steps):
         u = np.minimum(k * dt / DAF_RATIOS, 1.0)
-        drive = u * (60.0 - 180.0 * u + 120.0 * u * u) / MIN_JERK_PEAK_ACCELERATION  # 0 from u = 1 on
+        drive = minjerk.acceleration(u) / minjerk.PEAK_ACCELERATION  # 0 from u = 1 on
         v += dt * (w * w * (drive - x) - 2.0 * zeta * w * v)
         x += dt * v
         np.maximum(peak, x, out=peak)
@@ -140,16 +129,15 @@ def table_support(hull: np.ndarray, gravity: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Arrival:
-    """What `wrench.lip_load` needs to follow a load's arrival, per row (one row per load).
-
-    A row is a lift case (`transport_force` NaN) or a transport case (`transport_force` the
-    inertial part m a of the load, the rest being the weight `weight`)."""
+    """What `wrench.lip_load` needs to follow the arrival of one load case, per row (one row per
+    load): the lift (`transport_force` None) or a transport (`transport_force` the inertial part
+    m a of each load, the rest being the weight `weight`)."""
 
     weight: np.ndarray
     """(N, 3) the object's weight m g (N) in the object frame: its direction is "down"."""
 
-    transport_force: np.ndarray
-    """(N, 3) the transport's inertial force (N) in the object frame; NaN for a lift row."""
+    transport_force: np.ndarray | None
+    """(N, 3) the transport's inertial force (N) in the object frame; None for the lift."""
 
     inertia: np.ndarray
     """(3, 3) the object's inertia tensor about its centre of mass (kg m^2), object frame."""
@@ -176,15 +164,10 @@ class Arrival:
     zeta: float
     """Damping ratio of the swing (the silicone's loss factor / 2)."""
 
-    def take(self, rows: np.ndarray) -> Arrival:
+    def take(self, rows: np.ndarray | slice) -> Arrival:
         """The rows `rows` only."""
-        return Arrival(self.weight[rows], self.transport_force[rows], self.inertia, self.mass, self.support,
-                       self.lift_height, self.lift_time, self.transport_time, self.axial_stiffness, self.zeta)
-
-    @property
-    def is_transport(self) -> np.ndarray:
-        """(N,) rows that are transport cases."""
-        return np.isfinite(self.transport_force).all(axis=1)
+        transport = None if self.transport_force is None else self.transport_force[rows]
+        return dataclasses.replace(self, weight=self.weight[rows], transport_force=transport)
 
     def inertia_about(self, n: np.ndarray, arm: np.ndarray, frames: np.ndarray) -> np.ndarray:
         """(N,) moment of inertia about the tilt axis n (contact frame) through the lip centre:
@@ -212,4 +195,4 @@ class Arrival:
         pivot_axis = np.einsum("nji,nj->ni", frames, np.cross(down, towards))
         along_n = np.abs(np.einsum("ni,ni->n", pivot_axis, n))
         rate = np.where(reach > 1e-9, speed / (lever * np.cos(phi_s)) * along_n, 0.0)
-        return rate, self.lift_time * min_jerk_progress(risen, self.lift_height)
+        return rate, self.lift_time * minjerk.progress(risen / self.lift_height)

@@ -9,6 +9,7 @@ import numpy as np
 import trimesh
 
 from suctionbench.config import STANDARD_GRAVITY, LabelConfig
+from suctionbench.contact.arrival import table_support
 from suctionbench.contact.metrics import METRICS, GraspLabels
 from suctionbench.contact.robust import ObjectState, arrivals, inertial_forces, robust_wrench_resistance
 from suctionbench.contact.seal import SealModel, SealResult
@@ -17,6 +18,7 @@ from suctionbench.errors import InputError
 from suctionbench.geometry.frames import approach_frames
 from suctionbench.geometry.mesh import MeshInfo, validate_mesh
 from suctionbench.geometry.raycast import RayCaster
+from suctionbench.objects.mass import solid_properties
 
 DEFAULT_MASS = 1.0
 """Mass (kg) assumed when the object's mass is unknown, as in the paper."""
@@ -24,6 +26,13 @@ DEFAULT_MASS = 1.0
 NOMINAL_TRANSPORT_AZIMUTHS = np.array([0.0, 0.5, 1.0, 1.5]) * np.pi
 """Transport directions (rad round the vertical, from the contact frame's x axis) the nominal wrench
 test checks when the perturbation model has an inertial load: the worst of four horizontal ones."""
+
+
+def _inertia_about(mesh: trimesh.Trimesh, mass: float, com: np.ndarray) -> np.ndarray:
+    """(3, 3) inertia tensor (kg m^2) about `com` of the mesh's solid at uniform density weighing
+    `mass` (an object whose centre of mass is modelled off the centroid, a full bottle, keeps its
+    shape's spread of mass: an approximation)."""
+    return solid_properties(mesh, 1.0).scaled_to(mass).inertia_about(com)
 
 
 class SuctionLabeller:
@@ -54,7 +63,8 @@ class SuctionLabeller:
             raise InputError(f"gravity {gravity.tolist()!r}: must be three finite numbers")
         self.object = ObjectState(com=com, mass=float(mass), gravity=gravity,
                                   inertia=_inertia_about(self.info.mesh, float(mass), com),
-                                  support=np.asarray(self.info.mesh.convex_hull.vertices, dtype=float))
+                                  support=table_support(np.asarray(self.info.mesh.convex_hull.vertices, dtype=float),
+                                                        gravity))
         self.caster = RayCaster(self.info.mesh)
         self.seal_model = SealModel(self.caster, self.config.cup, self.config.seal)
 
@@ -145,16 +155,6 @@ class SuctionLabeller:
             com=self.object.com,
             config=self.config,
         )
-
-
-def _inertia_about(mesh: trimesh.Trimesh, mass: float, com: np.ndarray) -> np.ndarray:
-    """(3, 3) inertia tensor (kg m^2) about `com` of the mesh's solid at uniform density weighing
-    `mass`: trimesh's tensor about the solid's own centroid, scaled to the mass and moved to `com`
-    by the parallel-axis theorem (an object whose centre of mass is modelled off the centroid, a
-    full bottle, keeps its shape's spread of mass: an approximation)."""
-    own = np.asarray(mesh.moment_inertia, dtype=float) * (mass / float(mesh.mass))
-    d = np.asarray(mesh.center_mass, dtype=float) - com
-    return own + mass * (float(d @ d) * np.eye(3) - np.outer(d, d))
 
 
 def _check_grasps(points: np.ndarray, approaches: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -34,7 +34,7 @@ import numpy as np
 from scipy.special import ndtr, ndtri
 
 from suctionbench.config import CupConfig, PerturbationConfig
-from suctionbench.contact.arrival import Arrival, table_support
+from suctionbench.contact.arrival import Arrival
 from suctionbench.contact.seal import SealModel
 from suctionbench.contact.wrench import lip_load, resists, resists_qp
 from suctionbench.geometry.frames import so3_exp
@@ -61,8 +61,8 @@ class ObjectState:
     follows the pick's arrivals (contact/arrival.py); without, the step bound."""
 
     support: np.ndarray | None = None
-    """(H, 3) convex hull vertices (m), mesh frame: those lowest along `gravity` are what the object
-    stands on."""
+    """(H, 3) the hull vertices (m, mesh frame) the object stands on along `gravity`
+    (`arrival.table_support`)."""
 
     @property
     def gravity_force(self) -> np.ndarray:
@@ -108,25 +108,22 @@ def arrivals(obj: ObjectState, config: PerturbationConfig, cup: CupConfig, weigh
     support is unknown (the step bound)."""
     if obj.inertia is None or obj.support is None:
         return None
-    count = max(inertial.shape[1], 1)
-    nan = np.full_like(weight, np.nan)
-    support = table_support(np.asarray(obj.support, dtype=float), obj.gravity)
     return [
-        Arrival(weight, nan if case == 0 else inertial[:, case], np.asarray(obj.inertia, dtype=float), obj.mass,
-                support, config.lift_height, config.lift_time,
-                config.transport_time, cup.axial_stiffness, 0.5 * cup.bellows_loss_factor)
-        for case in range(count)
+        Arrival(weight, None if case == 0 else inertial[:, case], np.asarray(obj.inertia, dtype=float), obj.mass,
+                np.asarray(obj.support, dtype=float), config.lift_height, config.lift_time,
+                config.transport_time, cup.axial_stiffness, cup.swing_damping_ratio)
+        for case in range(max(inertial.shape[1], 1))
     ]
 
 
 def inertial_forces(
     mass: float, gravity: np.ndarray, acceleration: float, frames: np.ndarray, azimuths: np.ndarray,
-    lift_acceleration: float | None = None,
+    lift_acceleration: float,
 ) -> np.ndarray:
     """(N, 1 + A, 3) inertial forces -m a_cup of a pick's motions, in the mesh frame: the lift
-    (a_cup = `lift_acceleration` straight up, `acceleration` if None: m a along gravity) and one
-    transport per azimuth in `azimuths` (N, A) (a_cup = a horizontal, at that angle round the
-    vertical from the contact frame's x axis)."""
+    (a_cup = `lift_acceleration` straight up: m a_lift along gravity) and one transport per azimuth
+    in `azimuths` (N, A) (a_cup = `acceleration` horizontal, at that angle round the vertical from
+    the contact frame's x axis)."""
     gravity = np.asarray(gravity, dtype=float)
     norm = float(np.linalg.norm(gravity))
     count = len(frames)
@@ -137,7 +134,7 @@ def inertial_forces(
     h0 = ref / np.linalg.norm(ref, axis=1, keepdims=True)
     h1 = np.cross(down, h0)
     horizontal = np.cos(azimuths)[..., None] * h0[:, None] + np.sin(azimuths)[..., None] * h1[:, None]
-    lift = (mass * (acceleration if lift_acceleration is None else lift_acceleration)) * down[:, None, :]
+    lift = (mass * lift_acceleration) * down[:, None, :]
     return np.concatenate([lift, -(mass * acceleration) * horizontal], axis=1)
 
 
@@ -218,7 +215,7 @@ def evaluate_samples(seal: SealModel, samples: GraspSamples, cases: list[Arrival
     cup = seal.cup
     for start in range(0, len(out), CHUNK_SAMPLES):
         sl = slice(start, start + CHUNK_SAMPLES)
-        chunk = None if cases is None else [case.take(np.arange(len(out))[sl]) for case in cases]
+        chunk = None if cases is None else [case.take(sl) for case in cases]
         gate = _wrench_gate(samples.loads[sl], samples.com[sl], samples.frames[sl], samples.friction[sl], cup, chunk)
         out[sl] = seal.evaluate(samples.points[sl], samples.frames[sl], gate=gate)
     return out
@@ -263,7 +260,7 @@ def evaluate_samples_reference(seal: SealModel, samples: GraspSamples, cases: li
         centre, frame = result.ring_centre[0], samples.frames[i]
         wrenches = np.concatenate([
             lip_load(loads[i, case][None], samples.com[i][None], centre[None], frame[None], seal.cup,
-                     None if cases is None else cases[case].take(np.array([i])))
+                     None if cases is None else cases[case].take(slice(i, i + 1)))
             for case in range(loads.shape[1])
         ])
         out[i] = all(

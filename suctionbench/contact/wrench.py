@@ -331,15 +331,14 @@ def _lift_turn(swing: _Swing, phi_s: np.ndarray, arrival: Arrival, com: np.ndarr
 
 def _arrived_tilt(swing: _Swing, phi_s: np.ndarray, arrival: Arrival, com: np.ndarray, ring_centre: np.ndarray,
                   frames: np.ndarray, cup: CupConfig) -> np.ndarray:
-    """The swing's first turning point for the pick's arrivals (contact/arrival.py): a lift row
-    leaves the table at phi_s turning at the lift-off's rate; a transport row starts at the
-    weight's tilt, the inertial load arriving with the transport's response factor, on top of what
-    is left of the lift's swing."""
+    """The swing's first turning point for the pick's arrivals (contact/arrival.py): the lift
+    leaves the table at phi_s turning at the lift-off's rate; a transport starts at the weight's
+    tilt, the inertial load arriving with the transport's response factor, on top of what is left
+    of the lift's swing."""
     com = np.broadcast_to(np.asarray(com, dtype=float), swing.f.shape)
-    lift, inertia, _ = _lift_turn(swing, phi_s, arrival, com, ring_centre, frames)
-    transport = arrival.is_transport
-    if not transport.any():
-        return lift
+    if arrival.transport_force is None:
+        return _lift_turn(swing, phi_s, arrival, com, ring_centre, frames)[0]
+    inertia = arrival.inertia_about(swing.n, swing.r, frames)
     still = _Swing(arrival.weight, com, ring_centre, frames, cup, axis=swing.n).static_tilt()
     rest = swing.work(still)
     step = _turning_tilt(lambda p: swing.work(p) - rest, phi_s)  # the step's turning point from phi_0
@@ -352,7 +351,7 @@ def _arrived_tilt(swing: _Swing, phi_s: np.ndarray, arrival: Arrival, com: np.nd
     omega = np.sqrt(hanging.stiffness(hang) / np.maximum(hang_inertia, 1e-15))
     ringing = (peak - hang) * np.exp(-arrival.zeta * omega * (arrival.lift_time - lifted_at))
     ringing *= np.abs(np.einsum("ni,ni->n", hanging.n, swing.n))
-    return np.where(transport, carried + np.where(hanging.tips, ringing, 0.0), lift)
+    return carried + np.where(hanging.tips, ringing, 0.0)
 
 
 def lip_angles(count: int) -> np.ndarray:

@@ -216,11 +216,9 @@ class NormStats:
                              f"normalisation statistics of {self.image_channels} channel(s)")
         mean = torch.tensor(self.pose_mean, dtype=poses.dtype, device=poses.device)
         std = torch.tensor(self.pose_std, dtype=poses.dtype, device=poses.device)
-        if isinstance(self.image_mean, tuple):
-            image_mean = torch.tensor(self.image_mean, dtype=images.dtype, device=images.device)[None, :, None, None]
-            image_std = torch.tensor(self.image_std, dtype=images.dtype, device=images.device)[None, :, None, None]
-            return (images - image_mean) / image_std, (poses - mean) / std
-        return (images - self.image_mean) / self.image_std, (poses - mean) / std
+        image_mean = torch.tensor(self.image_mean, dtype=images.dtype, device=images.device).reshape(1, -1, 1, 1)
+        image_std = torch.tensor(self.image_std, dtype=images.dtype, device=images.device).reshape(1, -1, 1, 1)
+        return (images - image_mean) / image_std, (poses - mean) / std
 
 
 @dataclass(frozen=True)

@@ -193,13 +193,16 @@ class MassProperties:
     def __add__(self, other: MassProperties) -> MassProperties:
         mass = self.mass + other.mass
         com = (self.mass * self.com + other.mass * other.com) / mass
-        return MassProperties(mass, com, _shifted(self, com) + _shifted(other, com))
+        return MassProperties(mass, com, self.inertia_about(com) + other.inertia_about(com))
 
+    def inertia_about(self, point: np.ndarray) -> np.ndarray:
+        """Inertia tensor (3, 3) about `point` (parallel-axis theorem)."""
+        d = self.com - np.asarray(point, dtype=float)
+        return self.inertia + self.mass * (float(d @ d) * np.eye(3) - np.outer(d, d))
 
-def _shifted(props: MassProperties, point: np.ndarray) -> np.ndarray:
-    """Inertia of `props` about `point` (parallel-axis theorem)."""
-    d = props.com - point
-    return props.inertia + props.mass * (float(d @ d) * np.eye(3) - np.outer(d, d))
+    def scaled_to(self, mass: float) -> MassProperties:
+        """The same body's distribution of mass, weighing `mass`."""
+        return MassProperties(mass, self.com, self.inertia * (mass / self.mass))
 
 
 def solid_properties(mesh: trimesh.Trimesh, density: float) -> MassProperties:

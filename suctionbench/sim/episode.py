@@ -21,6 +21,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from suctionbench import minjerk
 from suctionbench.sim.cup import SuctionController
 from suctionbench.sim.ik import solve_ik
 from suctionbench.sim.scene import Scene
@@ -579,7 +580,7 @@ class PickEpisode:
 def min_jerk_path(waypoints: np.ndarray, times: np.ndarray) -> np.ndarray:
     """Joint targets (T, J) at `times` (fractions of the motion's duration, in [0, 1]) of a motion
     through `waypoints` (K, J), piecewise linear in joint space with minimum-jerk timing along it."""
-    return path_at(waypoints, 10 * times**3 - 15 * times**4 + 6 * times**5)
+    return path_at(waypoints, minjerk.position(times))
 
 
 def path_at(waypoints: np.ndarray, s: np.ndarray) -> np.ndarray:

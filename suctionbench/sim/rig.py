@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+from suctionbench import minjerk
 from suctionbench.config import CUP_DEFAULT, CupConfig
 from suctionbench.sim.cup import (
     ENV_CONAFFINITY,
@@ -192,7 +193,7 @@ class CupRig:
         start = target - episode.pregrasp_offset * self.axis - offset
         steps = int(0.5 / dt)
         here = d.qpos[self.carriage_qpos].copy()
-        self._run(steps, lambda k: here + (start - here) * _min_jerk((k + 1) / steps))
+        self._run(steps, lambda k: here + (start - here) * minjerk.position((k + 1) / steps))
         travel = episode.pregrasp_offset + episode.press_depth
         steps = int(travel / episode.approach_speed / dt)
         self._run(steps, lambda k: start + self.axis * travel * (k + 1) / steps,
@@ -221,7 +222,7 @@ class CupRig:
 
         def lifting(k):
             velocities.append(d.qvel[self.carriage_dofs].copy())
-            return hold_at + np.array([0.0, 0.0, lift]) * _min_jerk((k + 1) / steps)
+            return hold_at + np.array([0.0, 0.0, lift]) * minjerk.position((k + 1) / steps)
 
         self._run(steps, lifting, until=watch)
         self._run(int(hold / dt), hold_at + np.array([0.0, 0.0, lift]), until=watch)
@@ -233,7 +234,3 @@ class CupRig:
             peak_gravity_torque=torque[0], tilt_hanging=torque[1],
         )
 
-
-def _min_jerk(s: float) -> float:
-    s = min(max(s, 0.0), 1.0)
-    return 10 * s**3 - 15 * s**4 + 6 * s**5

@@ -246,7 +246,7 @@ def bench_plan(*, policies: list[str], model: str | None, scenes: int, seed: int
     """Seconds per planned grasp of each image policy on rendered scenes of the typical set; for
     gqcnn also the reference (the same CEM with one network call per candidate, unbatched)."""
     from suctionbench.objects.registry import list_objects
-    from suctionbench.policies.base import make_policy
+    from suctionbench.policies.base import MODEL_POLICIES, make_policy
     from suctionbench.sim.pick import PickRequest, PickRunner
 
     used_cores = _limit_cores(cores)
@@ -261,7 +261,7 @@ def bench_plan(*, policies: list[str], model: str | None, scenes: int, seed: int
         observations.append(runner.observe())
     result: dict[str, Any] = {"scenes": len(observations), "cores": used_cores}
     for name in policies:
-        policy = make_policy(name, **({"model": model} if name == "gqcnn" and model else {}))
+        policy = make_policy(name, **({"model": model} if name in MODEL_POLICIES and model else {}))
         policy.plan(observations[0], np.random.default_rng(seed))  # warm-up (model load, caches)
         start = time.perf_counter()
         for k, obs in enumerate(observations):

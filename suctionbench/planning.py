@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 
 from suctionbench.errors import InputError
-from suctionbench.policies.base import GraspAction, NoGraspError, Observation
+from suctionbench.policies.base import MODEL_POLICIES, GraspAction, NoGraspError, Observation
 from suctionbench.sensing.camera import CameraIntrinsics, resolve_camera
 
 MILLIMETRE_HINT_DEPTH = 20.0
@@ -409,7 +409,7 @@ def plan_grasp(
     depth = np.where(np.isfinite(depth), depth, 0.0).astype(np.float32)
     intrinsics = camera_for_image(camera, depth.shape)
     options = dict(policy_args or {})
-    if model is not None and builtin_name(policy) == "gqcnn":
+    if model is not None and builtin_name(policy) in MODEL_POLICIES:
         options.setdefault("model", str(model))
     planner = load_policy(policy, options)
     timings: dict[str, float] = {}

@@ -100,6 +100,7 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
     until it finishes, say): the run starts afresh, `notify` (the CLI: a note on stderr) is told so
     before the first trial, and the summary's "resumed" is false. "resumed" is true where an
     interrupted run was finished, "trials_reused" counts its trial logs that were kept."""
+    from suctionbench.policies.base import MODEL_POLICIES
     from suctionbench.policies.plugins import builtin_name, canonical_spec, load_policy, policy_label
     from suctionbench.sensing.camera import resolve_camera
 
@@ -113,7 +114,7 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
     else:
         spec = canonical_spec(policy)
         kwargs = dict(policy_args)
-        if builtin_name(spec) == "gqcnn":
+        if builtin_name(spec) in MODEL_POLICIES:
             _check_model(kwargs.get("model", model))
             if model:
                 kwargs.setdefault("model", model)

@@ -171,9 +171,13 @@ POLICIES: dict[str, str] = {
     "planarity": "suctionbench.policies.heuristics:PlanarityPolicy",
     "planarity-centroid": "suctionbench.policies.heuristics:PlanarityCentroidPolicy",
     "gqcnn": "suctionbench.policies.gqcnn:make_gqcnn_policy",
+    "fc-gqcnn": "suctionbench.policies.fc_gqcnn:make_fc_gqcnn_policy",
 }
 """Registered image policies: name -> "module:attribute" of a factory taking keyword arguments.
 Modules are imported on first use (the GQ-CNN policy's model loading pulls in torch)."""
+
+MODEL_POLICIES = ("gqcnn", "fc-gqcnn")
+"""Built-in policies that read a GQ-CNN model (the `model` option, `--model` on the command line)."""
 
 ALIASES: dict[str, str] = {"gqcnn-cem": "gqcnn"}
 """Other accepted names (DESIGN.md calls the GQ-CNN policy gqcnn-cem)."""

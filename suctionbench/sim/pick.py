@@ -257,13 +257,14 @@ class PickRunner:
     def _plan_from_image(self) -> Any:
         """Run an image policy from the registry on the current observation (world-frame result)."""
         from suctionbench.policies.analytic import RankedGrasp
-        from suctionbench.policies.base import make_policy
+        from suctionbench.policies.base import MODEL_POLICIES, make_policy
+        from suctionbench.policies.plugins import canonical_spec
 
         req = self.request
         key = (req.policy, req.model, repr(sorted(req.policy_args.items())))
         if key not in _POLICY_CACHE:  # policies are stateless between plans; models load once per process
             kwargs = dict(req.policy_args)
-            if req.policy in ("gqcnn", "gqcnn-cem") and req.model:
+            if canonical_spec(req.policy) in MODEL_POLICIES and req.model:
                 kwargs["model"] = req.model
             _POLICY_CACHE[key] = make_policy(req.policy, **kwargs)
         policy = _POLICY_CACHE[key]

@@ -1,0 +1,177 @@
+"""The dense suction policy: a GQ-CNN scored at every valid pixel at once (FC-GQ-CNN, beyond Dex-Net
+3.0; Dex-Net 4.0's fully convolutional GQ-CNN, Satish et al., RA-L 2019).
+
+Algorithm (one `plan`)
+----------------------
+1. The valid pixels of the observation (`base.scene_cloud`, as the CEM policy's seeds): each one a
+   grasp, its approach minus the smoothed normal there, its pose vector [gripper depth, approach
+   angle] and the image angle of its approach (`thumbnails.project_grasps`).
+2. The thumbnail network sees each grasp in a crop turned to that image angle. A dense pass needs
+   one image per angle, so the angles are binned into `rotations` bins (16: at most 11.25 deg
+   from the exact turn) and, per bin, the depth image is resampled on a lattice of 3-pixel pitch
+   (the thumbnail's own sampling: bilinear point samples, `extract_thumbnails`) turned to the
+   bin's angle, covering that bin's pixels. Every 32 x 32 window of the lattice is then the
+   thumbnail of the grasp at its centre, and `learning.dense.DenseGQCNN` scores them all: its
+   trunk once per lattice, its head at the window nearest each pixel (at most 2.1 pixels off, the
+   half-diagonal of the 3-pixel pitch).
+3. The quality map is q at every valid pixel (NaN elsewhere). The `refine` best pixels are scored
+   again exactly (their own thumbnails at their own angles, `GQCNNPolicy.score`), and the best of
+   those is the grasp, so the reported q is the network's own for the grasp executed.
+
+The model is a trained one-image-stream, VALID-padded GQ-CNN (`compact`; `load_model`), the same
+the CEM policy reads; `make_fc_gqcnn_policy()` loads the shipped one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy import ndimage
+
+from suctionbench.errors import InputError
+from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, scene_cloud
+from suctionbench.policies.gqcnn import CEMConfig, GQCNNPolicy, LazyModel, default_model_dir
+from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN, ThumbnailConfig, pose_vector, project_grasps
+
+
+@dataclass(frozen=True)
+class DenseConfig:
+    """Settings of the dense policy."""
+
+    rotations: int = 16
+    """Bins of the approach's image angle, one resampled image each (16: within 11.25 deg)."""
+
+    refine: int = 8
+    """Best pixels of the dense map scored again exactly (own thumbnail and angle); 0: none."""
+
+    sampler: SamplerConfig = field(default_factory=SamplerConfig)
+    """Which pixels are grasps (the CEM policy's seed sampler)."""
+
+    thumbnail: ThumbnailConfig = THUMBNAIL_GQCNN
+    """The thumbnail the network was trained on (its crop and size set the lattice's pitch)."""
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.rotations, int) and self.rotations >= 1):
+            raise InputError(f"dense policy: rotations = {self.rotations!r} must be an integer >= 1")
+        if not (isinstance(self.refine, int) and self.refine >= 0):
+            raise InputError(f"dense policy: refine = {self.refine!r} must be an integer >= 0")
+
+
+def lattice_positions(pixels: np.ndarray, angle: float, pitch: float, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """For grasp pixels (N, 2) = (u, v) turned by image angle `angle`: the lattice's sample points
+    (rows, cols, 2) = image (u, v), and each pixel's nearest window (N, 2) = (row, col) of its
+    top-left corner. Lattice point (a, b) is o + pitch (b e + a d), d = (cos, sin) the thumbnail's
+    row direction and e = (sin, -cos) its column direction (`thumbnails` module doc), so window
+    (a0, b0) is the thumbnail centred on o + pitch ((b0 + c) e + (a0 + c) d), c = (size - 1) / 2."""
+    d = np.array([math.cos(angle), math.sin(angle)])
+    e = np.array([math.sin(angle), -math.cos(angle)])
+    centre = (size - 1) / 2.0
+    along = pixels @ d / pitch - centre
+    across = pixels @ e / pitch - centre
+    a_min, b_min = math.floor(along.min()), math.floor(across.min())
+    windows = np.column_stack([np.rint(along - a_min), np.rint(across - b_min)]).astype(np.intp)
+    rows, cols = int(windows[:, 0].max()) + size, int(windows[:, 1].max()) + size
+    a, b = np.meshgrid(np.arange(rows) + a_min, np.arange(cols) + b_min, indexing="ij")
+    points = pitch * (b[..., None] * e + a[..., None] * d)
+    return points, windows
+
+
+class FCGQCNNPolicy:
+    """Dense suction policy (module docstring). `info` of a plan has `plan_time`, `relaxed`,
+    `evaluations` (pixels scored), `rotations` used and `quality_map` (H, W) float32, q at every
+    valid pixel and NaN elsewhere (logged to MCAP as an image)."""
+
+    name = "fc-gqcnn"
+
+    def __init__(self, model: Any, config: DenseConfig | None = None, **overrides: Any) -> None:
+        self.model = model
+        self.config = dataclasses.replace(config or DenseConfig(), **overrides)
+        self._dense = None
+
+    def __repr__(self) -> str:
+        return f"FCGQCNNPolicy({self.model!r}, {self.config})"
+
+    def _network(self):
+        """The loaded model and its dense form (built once)."""
+        model = self.model.load() if isinstance(self.model, LazyModel) else self.model
+        if self._dense is None:
+            from suctionbench.learning.dense import DenseGQCNN
+
+            network = getattr(model, "network", None)
+            if network is None:
+                raise InputError(f"dense policy: model {model!r} has no network to convert (a trained GQ-CNN)")
+            self._dense = DenseGQCNN(network).eval()
+        return model, self._dense
+
+    def quality(self, observation: Observation, cloud) -> dict[str, np.ndarray]:
+        """Every valid pixel's grasp and its dense q (module docstring, steps 1-2)."""
+        import torch
+
+        model, dense = self._network()
+        cfg = self.config
+        rows, cols = np.nonzero(cloud.valid)
+        pixels, points, approaches = cloud.grasps_at(rows, cols)
+        _, depths, angles = project_grasps(points, approaches, cloud.intrinsics)
+        poses = pose_vector(depths, approaches, cloud.table_normal)
+        step = 2.0 * math.pi / cfg.rotations
+        bins = np.mod(np.rint(angles / step).astype(np.intp), cfg.rotations)
+        pitch = cfg.thumbnail.crop_size / cfg.thumbnail.out_size
+        q = np.full(len(rows), -np.inf)
+        depth = np.asarray(observation.depth, dtype=np.float32)
+        stats = model.stats
+        with torch.no_grad():
+            for k in np.unique(bins):
+                mine = np.flatnonzero(bins == k)
+                points_uv, windows = lattice_positions(pixels[mine], k * step, pitch, cfg.thumbnail.out_size)
+                lattice = ndimage.map_coordinates(depth, [points_uv[..., 1], points_uv[..., 0]], order=1,
+                                                  mode="nearest").astype(np.float32)
+                image = torch.from_numpy(lattice)[None, None]
+                pose = torch.from_numpy(poses[mine])
+                image, pose = stats.normalise(image, pose)
+                maps = dense.trunk(image)
+                at = torch.from_numpy(windows)
+                logits = dense.head(maps, torch.zeros(len(mine), dtype=torch.long), at[:, 0], at[:, 1], pose)
+                q[mine] = torch.softmax(logits, dim=1)[:, 1].double().numpy()
+        return {"rows": rows, "cols": cols, "pixels": pixels, "points": points, "approaches": approaches,
+                "poses": poses, "q": q, "rotations": len(np.unique(bins))}
+
+    def plan(self, observation: Observation, rng: np.random.Generator) -> GraspAction:
+        start = time.perf_counter()
+        cfg = self.config
+        cloud = scene_cloud(observation, cfg.sampler)
+        dense = self.quality(observation, cloud)
+        q_map = np.full(cloud.valid.shape, np.nan, dtype=np.float32)
+        q_map[dense["rows"], dense["cols"]] = dense["q"]
+        order = np.argsort(-dense["q"], kind="stable")
+        best, q = int(order[0]), float(dense["q"][order[0]])
+        if cfg.refine:
+            top = order[: cfg.refine]
+            exact = GQCNNPolicy(self.model, CEMConfig(thumbnail=cfg.thumbnail, sampler=cfg.sampler)).score(
+                observation, cloud, dense["rows"][top], dense["cols"][top])
+            pick = int(np.argmax(exact["q"]))
+            best, q = int(top[pick]), float(exact["q"][pick])
+        return GraspAction(
+            point=dense["points"][best].copy(), approach=dense["approaches"][best].copy(),
+            pixel=dense["pixels"][best].copy(), q=q, camera_pose=observation.camera_pose.copy(),
+            policy=self.name,
+            candidates={key: dense[key] for key in ("pixels", "points", "approaches", "poses", "q")},
+            info={"plan_time": time.perf_counter() - start, "relaxed": cloud.relaxed, "chosen": best,
+                  "evaluations": len(dense["q"]), "rotations": dense["rotations"], "quality_map": q_map},
+        )
+
+
+def make_fc_gqcnn_policy(model: Any | str | Path | None = None, config: DenseConfig | None = None,
+                         **overrides: Any) -> FCGQCNNPolicy:
+    """Registry factory for "fc-gqcnn": `model` a loaded model (`load_model`), a model directory
+    (loaded on first use), or None for the shipped default."""
+    if model is None:
+        model = default_model_dir()
+    if isinstance(model, str | Path):
+        model = LazyModel(model)
+    return FCGQCNNPolicy(model, config, **overrides)

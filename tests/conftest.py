@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 import trimesh
 
 from suctionbench.config import CUP_DEFAULT
+from suctionbench.dataset.storage import shard_file_name
 
 
 def box(extents, center=(0.0, 0.0, 0.0)) -> trimesh.Trimesh:
@@ -34,3 +38,18 @@ def cup():
 @pytest.fixture
 def rng():
     return np.random.default_rng(1234)
+
+
+def remove_dataset_field(directory: Path, name: str) -> Path:
+    """Make the dataset in `directory` look as written before field `name` existed: its files gone,
+    and neither the shard manifests nor the card listing it (in place; returns `directory`)."""
+    for manifest_path in sorted((directory / "tensors").glob("shard_*.json")):
+        manifest = json.loads(manifest_path.read_text())
+        file = shard_file_name(name, manifest["shard"])
+        del manifest["files"][file]
+        (directory / "tensors" / file).unlink()
+        manifest_path.write_text(json.dumps(manifest))
+    card = json.loads((directory / "config.json").read_text())
+    del card["fields"][name]
+    (directory / "config.json").write_text(json.dumps(card))
+    return directory

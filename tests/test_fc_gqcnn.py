@@ -11,11 +11,10 @@ from scipy import ndimage
 from test_policies import OBJECTS, Scene
 
 from suctionbench.learning.checkpoint import load_model
-from suctionbench.learning.dense import DenseGQCNN
 from suctionbench.policies.base import make_policy, scene_cloud
 from suctionbench.policies.fc_gqcnn import lattice_positions
 from suctionbench.resources import asset_path
-from suctionbench.sensing.thumbnails import extract_thumbnails
+from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN, extract_thumbnails, project_grasps
 
 MODEL_DIR = asset_path("models", "gqcnn-compact")
 
@@ -26,17 +25,50 @@ def test_lattice_window_is_the_thumbnail_of_its_centre():
     rng = np.random.default_rng(0)
     depth = (0.6 + 0.05 * rng.random((120, 140))).astype(np.float32)
     pixels = np.array([[60.0, 50.0], [75.0, 66.0], [52.0, 71.0]])
-    angle, pitch, size = 2 * math.pi * 5 / 16, 3.0, 32
-    points, windows = lattice_positions(pixels, angle, pitch, size)
+    angle, config = 2 * math.pi * 5 / 16, THUMBNAIL_GQCNN
+    points, windows = lattice_positions(pixels, angle, config)
     lattice = ndimage.map_coordinates(depth, [points[..., 1], points[..., 0]], order=1, mode="nearest")
-    d = np.array([math.cos(angle), math.sin(angle)])
-    e = np.array([math.sin(angle), -math.cos(angle)])
     for (a0, b0), pixel in zip(windows, pixels, strict=True):
-        centre = points[a0, b0] + pitch * 15.5 * (d + e)
+        centre = _window_centre(points, a0, b0, angle)
         # the window nearest the pixel is centred within half the lattice's diagonal of it
-        assert np.linalg.norm(centre - pixel) <= pitch * math.sqrt(2) / 2 + 1e-9
+        assert np.linalg.norm(centre - pixel) <= 3.0 * math.sqrt(2) / 2 + 1e-9
         want = extract_thumbnails(depth, centre[None], np.array([angle]))[0]
-        np.testing.assert_allclose(lattice[a0:a0 + size, b0:b0 + size], want, rtol=0, atol=1e-6)
+        np.testing.assert_allclose(lattice[a0:a0 + 32, b0:b0 + 32], want, rtol=0, atol=1e-6)
+
+
+def _window_centre(points: np.ndarray, a0: int, b0: int, angle: float) -> np.ndarray:
+    """Image (u, v) of the centre of lattice window (a0, b0): its top-left sample plus 15.5 pitches
+    along the thumbnail's row and column axes (an independent reading of the geometry)."""
+    return points[a0, b0] + 3.0 * 15.5 * (np.array([math.cos(angle), math.sin(angle)])
+                                          + np.array([math.sin(angle), -math.cos(angle)]))
+
+
+def test_dense_q_is_the_network_on_each_pixels_window():
+    # refine 0: the dense map itself. At every valid pixel its q is the thumbnail network's q on
+    # the thumbnail centred on the pixel's lattice window, at its bin's angle, with the pixel's own
+    # pose: normalisation, pose rows, window indices and bins all checked together.
+    model = load_model(MODEL_DIR)
+    policy = make_policy("fc-gqcnn", model=model, refine=0)
+    scene = Scene("basic/box_tea")
+    observation = scene.observation(mask=scene.mask)
+    cloud = scene_cloud(observation, policy.config.sampler)
+    dense = policy.quality(observation, cloud)
+    _, depths, angles = project_grasps(dense["points"], dense["approaches"], cloud.intrinsics)
+    step = 2 * math.pi / policy.config.rotations
+    bins = np.mod(np.rint(angles / step).astype(int), policy.config.rotations)
+    pick = np.random.default_rng(0).choice(len(bins), size=60, replace=False)
+    centres, bin_angles = [], []
+    for i in pick:
+        mine = np.flatnonzero(bins == bins[i])
+        points, windows = lattice_positions(dense["pixels"][mine], bins[i] * step)
+        a0, b0 = windows[np.searchsorted(mine, i)]
+        centres.append(_window_centre(points, a0, b0, bins[i] * step))
+        bin_angles.append(bins[i] * step)
+    thumbnails = extract_thumbnails(observation.depth, np.array(centres), np.array(bin_angles))
+    want = model.predict(thumbnails, dense["poses"][pick])
+    np.testing.assert_allclose(dense["q"][pick], want, rtol=0, atol=1e-5)
+    action = policy.plan(observation, np.random.default_rng(0))
+    assert action.q == pytest.approx(float(dense["q"].max()))
 
 
 @pytest.fixture(scope="module")
@@ -63,12 +95,25 @@ def test_dense_plan_on_rendered_scenes(policy):
         assert action.q == pytest.approx(own, abs=1e-6)
 
 
-def test_dense_policy_refuses_a_network_it_cannot_convert():
+def test_dense_policy_refuses_a_model_it_cannot_convert():
     from suctionbench.errors import InputError
+    from suctionbench.learning.checkpoint import GQCNNModel
+    from suctionbench.learning.data import NormStats
     from suctionbench.learning.models import build_model
 
-    with pytest.raises(InputError, match="dense GQ-CNN"):
-        DenseGQCNN(build_model("dn3", torch.Generator().manual_seed(0)))
+    scene = Scene("basic/box_tea")
+    observation = scene.observation(mask=scene.mask)
+    stats = NormStats(0.6, 0.05, (0.6, 0.3), (0.05, 0.2))
+    dn3 = GQCNNModel(build_model("dn3", torch.Generator().manual_seed(0)), stats, {"arch": "dn3"})
+    with pytest.raises(InputError, match="dense GQ-CNN: only VALID"):
+        make_policy("fc-gqcnn", model=dn3).plan(observation, np.random.default_rng(0))
+
+    class Scores:  # a model that only predicts (a stub): nothing to make dense
+        def predict(self, images, poses):
+            return np.full(len(images), 0.5)
+
+    with pytest.raises(InputError, match="no network to convert"):
+        make_policy("fc-gqcnn", model=Scores()).plan(observation, np.random.default_rng(0))
 
 
 def test_pick_with_the_dense_policy_is_a_valid_episode():

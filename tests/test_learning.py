@@ -14,10 +14,11 @@ import shutil
 import numpy as np
 import pytest
 import torch
+from conftest import remove_dataset_field
 from typer.testing import CliRunner
 
 from suctionbench.cli import app
-from suctionbench.dataset.storage import DatasetReader, DatasetWriter, read_split, shard_file_name, write_splits
+from suctionbench.dataset.storage import DatasetReader, DatasetWriter, read_split, write_splits
 from suctionbench.errors import InputError
 from suctionbench.learning.checkpoint import CARD_NAME, STATE_NAME, WEIGHTS_NAME, GQCNNModel, load_model, save_model
 from suctionbench.learning.data import (
@@ -130,19 +131,9 @@ def dataset(tmp_path_factory):
 
 
 def without_context(dataset, directory):
-    """A copy of `dataset` as written before datasets stored the context thumbnail: no context files,
-    manifests and card without the field."""
+    """A copy of `dataset` as written before datasets stored the context thumbnail."""
     shutil.copytree(dataset, directory)
-    for manifest_path in sorted((directory / "tensors").glob("shard_*.json")):
-        manifest = json.loads(manifest_path.read_text())
-        name = shard_file_name(CONTEXT_FIELD, manifest["shard"])
-        del manifest["files"][name]
-        (directory / "tensors" / name).unlink()
-        manifest_path.write_text(json.dumps(manifest))
-    card = json.loads((directory / "config.json").read_text())
-    del card["fields"][CONTEXT_FIELD]
-    (directory / "config.json").write_text(json.dumps(card))
-    return directory
+    return remove_dataset_field(directory, CONTEXT_FIELD)
 
 
 def train_arrays(dataset, kind: str = "image_wise", image_channels: int = 1

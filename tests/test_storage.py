@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import remove_dataset_field
 
 from suctionbench.dataset import storage
 from suctionbench.dataset.storage import (
@@ -273,16 +274,8 @@ def test_dataset_written_before_the_context_field(dataset, data):
 
     name = "context_ims_tf_table"
     assert name in storage.LATER_FIELDS
-    for index in range(3):
-        manifest_path = dataset / "tensors" / f"shard_{index:05d}.json"
-        manifest = json.loads(manifest_path.read_text())
-        del manifest["files"][f"{name}_{index:05d}.npz"]
-        manifest_path.write_text(json.dumps(manifest))
-        (dataset / "tensors" / f"{name}_{index:05d}.npz").unlink()
     write_card(dataset, {"datapoints": N})
-    card = json.loads((dataset / "config.json").read_text())
-    del card["fields"][name]
-    (dataset / "config.json").write_text(json.dumps(card))
+    remove_dataset_field(dataset, name)
     reader = DatasetReader(dataset)
     assert reader.shard_indices == [0, 1, 2] and reader.verify(expected_datapoints=N) == []
     assert not reader.has_field(name) and reader.has_field("depth_ims_tf_table")

@@ -7,8 +7,8 @@ Simulation: the moment the lip's point springs carry about the lip centre, over 
 limit r F / 2 of the force F they carry (their sum), at its peak in each motion; with the points
 unfolded there (lifted to their free length), the bellows' tilt, the leak area and the cup's
 vacuum at that step. Labeller: the nominal grasp's lip moment at the swing's turning point over its
-ring limit r (V + f_z) / 2, per load case (the lift, then transports at azimuths 0, 90, 180,
-270 deg at the rated acceleration), the nominal weight without perturbation.
+ring limit r (V + f_z) / 2, per load case (the lift, then transports at the labeller's nominal
+azimuths 0, 90, 180, 270 deg at the rated acceleration), the nominal weight without perturbation.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import numpy as np
 
 from suctionbench.config import LabelConfig
 from suctionbench.contact import wrench
-from suctionbench.contact.labeller import SuctionLabeller
+from suctionbench.contact.labeller import NOMINAL_TRANSPORT_AZIMUTHS, SuctionLabeller
 from suctionbench.contact.robust import arrivals, inertial_forces
 from suctionbench.objects.registry import load_object
 from suctionbench.sim.pick import PickRequest, PickRunner
@@ -31,17 +31,17 @@ def simulated(runner: PickRunner) -> tuple[dict, dict[str, str]]:
     episode = runner.episode
     cup_state, cup = episode.cup, episode.cup.cup
     k = cup_state.sim.lip_point_stiffness(cup)
-    theta = 2.0 * math.pi * np.arange(len(cup_state.lip_qpos)) / len(cup_state.lip_qpos)
+    theta = wrench.lip_angles(len(cup_state.lip_qpos))  # the lip points' bearings (sim/cup.py lays them so)
     rows: dict[str, list] = {"lift": [], "transport": []}
 
     def record(data, controller) -> None:
-        if episode._motion not in rows:
+        if episode.motion not in rows:
             return
         fold = data.qpos[controller.lip_qpos]
         push = -k * fold
         moment = cup.radius * math.hypot((push * np.sin(theta)).sum(), (push * np.cos(theta)).sum())
-        tilt = math.degrees(float(np.linalg.norm(data.qpos[controller._tilt_qpos])))
-        rows[episode._motion].append((moment / (0.5 * cup.radius * push.sum()), moment, int((fold > -1e-5).sum()),
+        tilt = math.degrees(controller.bellows_tilt(data))
+        rows[episode.motion].append((moment / (0.5 * cup.radius * push.sum()), moment, int((fold > -1e-5).sum()),
                                       tilt, controller.leak_area, controller.vacuum(data)))
 
     episode.recorder, episode.record_every = record, 1
@@ -64,12 +64,11 @@ def labelled(runner: PickRunner, pose: np.ndarray, result: dict) -> list[str]:
     grasp = np.asarray(result["grasp_world"], dtype=float)
     point, approach = grasp[None, :3], grasp[None, 3:]
     frames, seal = labeller.frames(point, approach), labeller.seal(point, approach)
-    cup, obj = labeller.config.cup, labeller.object
+    cup, obj, motion = labeller.config.cup, labeller.object, labeller.config.perturbation
     weight = obj.gravity_force[None]
-    azimuths = np.array([[0.0, 0.5, 1.0, 1.5]]) * np.pi
-    inertial = inertial_forces(obj.mass, obj.gravity, cup.peak_acceleration, frames, azimuths,
-                               labeller.config.perturbation.lift_acceleration)
-    cases = arrivals(obj, labeller.config.perturbation, cup, weight, inertial)
+    inertial = inertial_forces(obj.mass, obj.gravity, motion.inertial_acceleration, frames,
+                               NOMINAL_TRANSPORT_AZIMUTHS[None], motion.lift_acceleration)
+    cases = arrivals(obj, motion, cup, weight, inertial)
     out = []
     for case, arrival in enumerate(cases):
         w = wrench.lip_load(weight + inertial[:, case], com[None], seal.ring_centre, frames, cup, arrival)

@@ -114,7 +114,7 @@ def bench_generate_cmd(
 @bench_app.command("plan")
 def bench_plan_cmd(
     policies: Annotated[str, typer.Option(help="Comma-separated image policies.")] = (
-        "random,centroid,planarity,planarity-centroid,gqcnn"
+        "random,centroid,planarity,planarity-centroid,gqcnn,fc-gqcnn"
     ),
     model: Annotated[str | None, typer.Option(help="GQ-CNN model directory (default: the shipped one).")] = None,
     scenes: Annotated[int, typer.Option(help="Rendered scenes (typical objects) per policy.")] = 5,

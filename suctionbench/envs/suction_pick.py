@@ -352,9 +352,8 @@ class SuctionPickEnv(gymnasium.Env):
         qvel = slice(dof, dof + 6)
         object_qpos, object_qvel = data.qpos[qpos].copy(), data.qvel[qvel].copy()
         data.qpos[:], data.qvel[:], data.ctrl[:] = qpos_ready, 0.0, ctrl_ready
-        data.qfrc_applied[:] = 0.0  # the cup's stop spring, set again by its next update
         data.qpos[qpos], data.qvel[qvel] = object_qpos, object_qvel
-        episode.cup.commanded, episode.cup.sealed = False, -1
+        episode.cup.release(data)
         mujoco.mj_forward(model, data)
         def step() -> None:
             mujoco.mj_step(model, data)

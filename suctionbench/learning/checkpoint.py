@@ -58,11 +58,10 @@ class GQCNNModel:
     """
 
     def __init__(self, network: torch.nn.Module, stats: NormStats, card: dict[str, Any], device: str = "cpu"):
-        channels = int(getattr(network, "image_channels", 1))
-        if stats.image_channels != channels:
-            raise InputError(f"GQ-CNN model '{card.get('arch')}': the network reads {channels} image channel(s), "
-                             f"the normalisation statistics are for {stats.image_channels}")
         self.network = network.to(device).eval()
+        if stats.image_channels != self.image_channels:
+            raise InputError(f"GQ-CNN model '{card.get('arch')}': the network reads {self.image_channels} image "
+                             f"channel(s), the normalisation statistics are for {stats.image_channels}")
         self.stats = stats
         self.card = card
         self.device = torch.device(device)
@@ -184,11 +183,10 @@ def load_model(directory: str | Path, device: str = "cpu") -> GQCNNModel:
         raise InputError(f"model weights '{weights}': unreadable ({exc})") from None
     check_finite_weights(tensors, f"model weights '{weights}'")
     network = build_model(card["arch"])
-    channels = network.image_channels
-    if card.get("image_channels", 1) != channels or stats.image_channels != channels:
+    channels = network.image_channels  # the statistics' channels: GQCNNModel checks them
+    if card.get("image_channels", 1) != channels:
         raise InputError(f"model card '{Path(directory) / CARD_NAME}': architecture '{card['arch']}' reads "
-                         f"{channels} image channel(s), but the card records {card.get('image_channels', 1)} "
-                         f"and normalisation statistics for {stats.image_channels}")
+                         f"{channels} image channel(s), but the card records {card.get('image_channels', 1)}")
     try:
         network.load_state_dict(tensors, strict=True)
     except RuntimeError as exc:

@@ -281,7 +281,7 @@ def augment(images: torch.Tensor, poses: torch.Tensor, generator: torch.Generato
     """
     if config.noise:
         images = apply_depth_noise_torch(images, generator, config.depth_noise, prob=1.0, gp_prob=config.gp_prob,
-                                         field_channels=1 if images.shape[1] > 1 else None)
+                                         field_channels=1)  # the grasp thumbnail's field only
     if config.symmetrize:
         flips = torch.rand(2, len(images), generator=generator, device=generator.device) < 0.5
         images, angles = symmetrize(images, poses[:, 1], flips[0], flips[1])

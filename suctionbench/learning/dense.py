@@ -12,11 +12,11 @@ larger image, the convolutions already compute every window's features; only the
 would skip windows. So each pool runs with stride 1 instead, and every later layer reads its
 input with a dilation of 2 per pool passed (the "a trous" identity: what a stride-2 pool followed
 by a kernel of taps 1 apart computes for one window equals a stride-1 pool followed by the same
-kernel with taps 2 apart, at the window's position). The fully connected layer becomes an s x s
-convolution with that dilation (its weights reshaped: torch flattens (C, H, W) row-major), and the
-pose stream and the merge layers become 1 x 1 convolutions over a pose map (one pose per
-position). Output (B, 2, H - 31, W - 31) logits for an input (B, 1, H, W): position (i, j) is the
-32 x 32 window whose top-left pixel is (i, j), i.e. the thumbnail centred on (i + 15.5, j + 15.5).
+kernel with taps 2 apart, at the window's position). The fully connected layer over the last
+s x s x C map then reads, for a window, its s x s taps that dilation apart (gathered in torch's
+(C, H, W) flatten order, so the layer's own weights apply), and the pose stream and the merge run
+as they are, one pose per position. Position (i, j) is the 32 x 32 window whose top-left pixel is
+(i, j), i.e. the thumbnail centred on (i + 15.5, j + 15.5).
 
 Cost. No pooling shrinks the maps, so every layer runs at the input's resolution: for compact,
 400 + 2 x 2,304 + 25,600 + merge ~ 31 k multiply-accumulates per position, where a thumbnail
@@ -38,62 +38,44 @@ import torch.nn.functional as F
 from torch import nn
 
 from suctionbench.errors import InputError
-from suctionbench.learning.models import GQCNN, IMAGE_SIZE
+from suctionbench.learning.models import GQCNN
 
 
 class DenseGQCNN(nn.Module):
-    """The fully convolutional form of a VALID-padded, one-image-stream `GQCNN` (module doc)."""
+    """The fully convolutional form of a VALID-padded, one-image-stream `GQCNN` (module doc): the
+    network's own layers, its convolutions and pools run densely (`trunk`), its fully connected
+    layers at the positions asked for (`head`)."""
 
     def __init__(self, net: GQCNN):
         super().__init__()
         if net.context_stream is not None:
             raise InputError("dense GQ-CNN: a context network (two image streams) cannot be converted yet")
-        self.layers: list[tuple[str, nn.Module, int]] = []
-        """(kind, module, dilation) of the image stream, in order: conv, relu, lrn, pool, fc."""
+        self.net = net
+        self.layers: list[tuple[nn.Module, int]] = []
+        """(module, dilation) of the image stream's conv blocks, in order (conv, ReLU, LRN, pool)."""
         dilation = 1
         for block in net.image_stream:
             if isinstance(block, nn.Sequential):  # a conv block: conv -> ReLU [-> LRN] [-> pool]
                 for module in block:
-                    if isinstance(module, nn.Conv2d):
-                        if module.padding not in ((0, 0), "valid"):
-                            raise InputError("dense GQ-CNN: only VALID-padded networks convert exactly (not dn3)")
-                        self.layers.append(("conv", module, dilation))
-                    elif isinstance(module, nn.MaxPool2d):
-                        self.layers.append(("pool", module, dilation))
-                        dilation *= 2
-                    else:
-                        self.layers.append(("pointwise", module, dilation))
-            elif isinstance(block, nn.Linear):  # fc3 over the last C x s x s map
-                channels = self.layers_channels()
-                side = round((block.in_features / channels) ** 0.5)
-                fc = nn.Conv2d(channels, block.out_features, side, dilation=dilation)
-                fc.weight.data = block.weight.data.reshape(block.out_features, channels, side, side).clone()
-                fc.bias.data = block.bias.data.clone()
-                self.layers.append(("fc", fc, dilation))
-            elif isinstance(block, nn.ReLU):
-                self.layers.append(("pointwise", block, dilation))
-        self.stream = nn.ModuleList([module for _, module, _ in self.layers])
-        self.fc, self.fc_dilation = next((m, d) for kind, m, d in self.layers if kind == "fc")
-        self.fc_matrix = self.fc.weight.detach().reshape(self.fc.out_channels, -1)
-        self.pose = _pointwise(net.pose_stream.pc1)
-        self.merge_hidden = _pointwise(net.merge.fc4)
-        self.merge_out = _pointwise(net.merge.fc5)
-
-    def layers_channels(self) -> int:
-        """Output channels of the last convolution so far."""
-        convs = [module for kind, module, _ in self.layers if kind == "conv"]
-        return convs[-1].out_channels
+                    if isinstance(module, nn.Conv2d) and module.padding not in ((0, 0), "valid"):
+                        raise InputError("dense GQ-CNN: only VALID-padded networks convert exactly (not dn3)")
+                    self.layers.append((module, dilation))
+                    dilation *= 2 if isinstance(module, nn.MaxPool2d) else 1
+            elif isinstance(block, nn.Linear):  # fc3: read densely as s x s taps, `dilation` apart
+                self.fc3, self.fc_dilation = block, dilation
+            elif not isinstance(block, nn.Flatten | nn.ReLU):
+                raise InputError(f"dense GQ-CNN: image stream layer {block!r} has no dense form")
+        channels = next(m for m, _ in reversed(self.layers) if isinstance(m, nn.Conv2d)).out_channels
+        self.fc_side = round((self.fc3.in_features / channels) ** 0.5)
 
     def trunk(self, image: torch.Tensor) -> torch.Tensor:
         """The image stream's maps before its fully connected layer, (B, C, h, w), for a normalised
         image (B, 1, H, W): the cheap part, shared by every position."""
         x = image
-        for kind, module, dilation in self.layers:
-            if kind == "fc":
-                break
-            if kind == "conv":
+        for module, dilation in self.layers:
+            if isinstance(module, nn.Conv2d):
                 x = F.conv2d(x, module.weight, module.bias, dilation=dilation)
-            elif kind == "pool":
+            elif isinstance(module, nn.MaxPool2d):
                 x = F.max_pool2d(x, 2, stride=1, dilation=dilation)
             else:
                 x = module(x)
@@ -103,35 +85,12 @@ class DenseGQCNN(nn.Module):
              poses: torch.Tensor) -> torch.Tensor:
         """Logits (P, 2) at P output positions (image `batch`, `rows`, `cols`; (P,) long) of the
         trunk's `maps`, with normalised poses (P, 2): the fully connected layer's taps gathered
-        where the dense form would read them (s x s, the final dilation apart), so only the
-        positions asked for pay for it."""
-        fc, dilation = self.fc, self.fc_dilation
-        side = fc.kernel_size[0]
-        taps = dilation * torch.arange(side, device=maps.device)
+        where the dense form would read them (s x s, the final dilation apart), then the network's
+        own fully connected layers, so only the positions asked for pay for them. Position (i, j)
+        is the 32 x 32 window whose top-left pixel is (i, j) of the trunk's input."""
+        taps = self.fc_dilation * torch.arange(self.fc_side, device=maps.device)
         r = rows[:, None, None] + taps[None, :, None]
         c = cols[:, None, None] + taps[None, None, :]
-        windows = maps[batch[:, None, None], :, r, c]  # (P, s, s, C)
-        features = torch.relu(windows.permute(0, 3, 1, 2).reshape(len(rows), -1) @ self.fc_matrix.T + fc.bias)
-        hidden = torch.cat([features, torch.relu(poses @ self.pose.weight[:, :, 0, 0].T + self.pose.bias)], dim=1)
-        hidden = torch.relu(hidden @ self.merge_hidden.weight[:, :, 0, 0].T + self.merge_hidden.bias)
-        return hidden @ self.merge_out.weight[:, :, 0, 0].T + self.merge_out.bias
-
-    def forward(self, image: torch.Tensor, poses: torch.Tensor) -> torch.Tensor:
-        """Logits (B, 2, H - 31, W - 31) for a normalised image (B, 1, H, W) and normalised poses
-        (B, 2, H - 31, W - 31), one per output position (the thumbnail centred there)."""
-        x = F.conv2d(self.trunk(image), self.fc.weight, self.fc.bias, dilation=self.fc_dilation)
-        merged = torch.relu(self.merge_hidden(torch.cat([torch.relu(x), torch.relu(self.pose(poses))], dim=1)))
-        return self.merge_out(merged)
-
-
-def _pointwise(linear: nn.Linear) -> nn.Conv2d:
-    """A fully connected layer as the 1 x 1 convolution that applies it at every position."""
-    conv = nn.Conv2d(linear.in_features, linear.out_features, 1)
-    conv.weight.data = linear.weight.data[:, :, None, None].clone()
-    conv.bias.data = linear.bias.data.clone()
-    return conv
-
-
-def output_size(height: int, width: int) -> tuple[int, int]:
-    """Positions (rows, columns) a dense pass over an image of height x width scores."""
-    return height - IMAGE_SIZE + 1, width - IMAGE_SIZE + 1
+        windows = maps[batch[:, None, None], :, r, c].permute(0, 3, 1, 2)  # (P, C, s, s): fc3's flatten order
+        features = torch.relu(self.fc3(windows.reshape(len(rows), -1)))
+        return self.net.merge(torch.cat([features, self.net.pose_stream(poses)], dim=1))

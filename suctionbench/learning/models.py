@@ -185,12 +185,10 @@ _SPECS: dict[str, dict] = {
 }
 
 ARCHITECTURES = tuple(_SPECS)
-"""Names `build_model` accepts."""
+"""Names `build_model` accepts, and `train`: the context nets train on datasets that store the
+context thumbnail (`context_ims_tf_table`, written by ``suctionbench generate``); `image_channels_of`
+tells which."""
 
-TRAINABLE_ARCHITECTURES = ARCHITECTURES
-"""Names `train` accepts: all of them. The context nets train on datasets that store the context
-thumbnail (`context_ims_tf_table`, written by ``suctionbench generate``); `image_channels_of` tells
-the data pipeline which fields to read."""
 
 
 def image_channels_of(arch: str) -> int:
@@ -233,7 +231,7 @@ def count_parameters(model: nn.Module) -> int:
     return sum(p.numel() for p in model.parameters() if p.requires_grad)
 
 
-def count_macs(model: nn.Module) -> int:
+def count_macs(model: GQCNN) -> int:
     """Multiply-accumulates of one forward pass for one grasp, over conv and linear layers (FLOPs ~ 2x).
 
     Measured by running one dummy input through the network with hooks, so it follows the real
@@ -249,7 +247,7 @@ def count_macs(model: nn.Module) -> int:
     return total
 
 
-def activation_bytes(model: nn.Module) -> int:
+def activation_bytes(model: GQCNN) -> int:
     """Bytes of the outputs of every layer in one forward pass for one grasp: what a training step
     keeps per image for the backward pass (measured with hooks on a dummy input, like `count_macs`)."""
     total = 0
@@ -263,13 +261,13 @@ def activation_bytes(model: nn.Module) -> int:
     return total
 
 
-def _dummy_forward(model: nn.Module, modules: list[nn.Module], hook) -> None:
+def _dummy_forward(model: GQCNN, modules: list[nn.Module], hook) -> None:
     """One forward pass of a zero grasp (one image, one pose) with `hook` on `modules`, removed after."""
     handles = [m.register_forward_hook(hook) for m in modules]
     try:
         with torch.no_grad():
             param = next(model.parameters())
-            model(torch.zeros(1, getattr(model, "image_channels", 1), IMAGE_SIZE, IMAGE_SIZE, device=param.device),
+            model(torch.zeros(1, model.image_channels, IMAGE_SIZE, IMAGE_SIZE, device=param.device),
                   torch.zeros(1, POSE_DIM, device=param.device))
     finally:
         for handle in handles:

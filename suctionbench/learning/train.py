@@ -9,7 +9,7 @@ symmetrisation augmentation (`suctionbench.learning.data`). gqcnn adds ``l2 * su
 ``base * 0.95 ** floor(examples_seen / (0.66 * num_train))``; `_StaircaseDecay` computes the same
 from the step count.
 
-Architectures. Every name in `TRAINABLE_ARCHITECTURES` trains here: dn3 and compact read the grasp
+Architectures. Every name in `ARCHITECTURES` trains here: dn3 and compact read the grasp
 thumbnail, the context nets (context, context-wide) the grasp and the context thumbnail
 (`suctionbench.learning.models.image_channels_of`). That channel count decides which dataset
 fields `SplitData` loads (a dataset without ``context_ims_tf_table`` is refused for the context
@@ -75,7 +75,7 @@ from suctionbench.learning.data import (
 )
 from suctionbench.learning.metrics import average_precision, plot_precision_recall, precision_recall_curve
 from suctionbench.learning.models import (
-    TRAINABLE_ARCHITECTURES,
+    ARCHITECTURES,
     activation_bytes,
     build_model,
     count_macs,
@@ -159,7 +159,7 @@ class TrainConfig:
             return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
 
         checks = {
-            "arch": (self.arch in TRAINABLE_ARCHITECTURES, f"one of {', '.join(TRAINABLE_ARCHITECTURES)}"),
+            "arch": (self.arch in ARCHITECTURES, f"one of {', '.join(ARCHITECTURES)}"),
             "epochs": (integer(self.epochs, 1), "an integer >= 1"),
             "batch_size": (integer(self.batch_size, 1), "an integer >= 1"),
             "learning_rate": (number(self.learning_rate) and self.learning_rate > 0, "a number > 0"),
@@ -490,7 +490,7 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
                         "crop), channel 1 the context thumbnail (288 px crop, 9 x 9 block means), both with the "
                         "grasp at the centre and the approach's image pointing down the middle column")
     base_card = {
-        "arch": config.arch, "image_channels": channels, "parameters": count_parameters(network),
+        "arch": config.arch, "parameters": count_parameters(network),
         "macs_per_grasp": count_macs(network),
         "inputs": {"images": images_input,
                    "poses": "(N, 2) [gripper depth (m), approach angle to the table normal (rad, >= 0)]"},

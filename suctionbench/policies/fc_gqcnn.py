@@ -16,7 +16,8 @@ Algorithm (one `plan`)
    half-diagonal of the 3-pixel pitch).
 3. The quality map is q at every valid pixel (NaN elsewhere). The `refine` best pixels are scored
    again exactly (their own thumbnails at their own angles, `GQCNNPolicy.score`), and the best of
-   those is the grasp, so the reported q is the network's own for the grasp executed.
+   those is the grasp, so the reported q is the network's own for the grasp executed (with
+   `refine` 0, the dense map's best and its dense q).
 
 The model is a trained one-image-stream, VALID-padded GQ-CNN (`compact`; `load_model`), the same
 the CEM policy reads; `make_fc_gqcnn_policy()` loads the shipped one.
@@ -36,8 +37,14 @@ from scipy import ndimage
 
 from suctionbench.errors import InputError
 from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, scene_cloud
-from suctionbench.policies.gqcnn import CEMConfig, GQCNNPolicy, LazyModel, default_model_dir
-from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN, ThumbnailConfig, pose_vector, project_grasps
+from suctionbench.policies.gqcnn import CEMConfig, GQCNNPolicy, LazyModel, resolve_model
+from suctionbench.sensing.thumbnails import (
+    THUMBNAIL_GQCNN,
+    ThumbnailConfig,
+    pose_vector,
+    project_grasps,
+    thumbnail_axes,
+)
 
 
 @dataclass(frozen=True)
@@ -63,35 +70,36 @@ class DenseConfig:
             raise InputError(f"dense policy: refine = {self.refine!r} must be an integer >= 0")
 
 
-def lattice_positions(pixels: np.ndarray, angle: float, pitch: float, size: int) -> tuple[np.ndarray, np.ndarray]:
+def lattice_positions(pixels: np.ndarray, angle: float, config: ThumbnailConfig = THUMBNAIL_GQCNN
+                      ) -> tuple[np.ndarray, np.ndarray]:
     """For grasp pixels (N, 2) = (u, v) turned by image angle `angle`: the lattice's sample points
     (rows, cols, 2) = image (u, v), and each pixel's nearest window (N, 2) = (row, col) of its
-    top-left corner. Lattice point (a, b) is o + pitch (b e + a d), d = (cos, sin) the thumbnail's
-    row direction and e = (sin, -cos) its column direction (`thumbnails` module doc), so window
-    (a0, b0) is the thumbnail centred on o + pitch ((b0 + c) e + (a0 + c) d), c = (size - 1) / 2."""
-    d = np.array([math.cos(angle), math.sin(angle)])
-    e = np.array([math.sin(angle), -math.cos(angle)])
-    centre = (size - 1) / 2.0
-    along = pixels @ d / pitch - centre
-    across = pixels @ e / pitch - centre
+    top-left corner. Lattice point (a, b) is o + p (b e + a d), p the thumbnail's pitch in image
+    pixels (1 / config.scale) and d, e its row and column axes (`thumbnails.thumbnail_axes`), so
+    window (a0, b0) is the thumbnail centred on o + p ((b0 + c) e + (a0 + c) d), c = config.centre."""
+    d, e = thumbnail_axes(angle)
+    pitch, size = 1.0 / config.scale, config.out_size
+    along = pixels @ d / pitch - config.centre
+    across = pixels @ e / pitch - config.centre
     a_min, b_min = math.floor(along.min()), math.floor(across.min())
     windows = np.column_stack([np.rint(along - a_min), np.rint(across - b_min)]).astype(np.intp)
     rows, cols = int(windows[:, 0].max()) + size, int(windows[:, 1].max()) + size
     a, b = np.meshgrid(np.arange(rows) + a_min, np.arange(cols) + b_min, indexing="ij")
-    points = pitch * (b[..., None] * e + a[..., None] * d)
-    return points, windows
+    return pitch * (b[..., None] * e + a[..., None] * d), windows
 
 
 class FCGQCNNPolicy:
     """Dense suction policy (module docstring). `info` of a plan has `plan_time`, `relaxed`,
     `evaluations` (pixels scored), `rotations` used and `quality_map` (H, W) float32, q at every
-    valid pixel and NaN elsewhere (logged to MCAP as an image)."""
+    valid pixel and NaN elsewhere."""
 
     name = "fc-gqcnn"
 
     def __init__(self, model: Any, config: DenseConfig | None = None, **overrides: Any) -> None:
         self.model = model
         self.config = dataclasses.replace(config or DenseConfig(), **overrides)
+        self.exact = GQCNNPolicy(model, CEMConfig(thumbnail=self.config.thumbnail, sampler=self.config.sampler))
+        """Scores the refined pixels with their own thumbnails (the CEM policy's scoring)."""
         self._dense = None
 
     def __repr__(self) -> str:
@@ -102,10 +110,14 @@ class FCGQCNNPolicy:
         model = self.model.load() if isinstance(self.model, LazyModel) else self.model
         if self._dense is None:
             from suctionbench.learning.dense import DenseGQCNN
+            from suctionbench.learning.models import IMAGE_SIZE
 
             network = getattr(model, "network", None)
             if network is None:
                 raise InputError(f"dense policy: model {model!r} has no network to convert (a trained GQ-CNN)")
+            if self.config.thumbnail.out_size != IMAGE_SIZE:
+                raise InputError(f"dense policy: thumbnail size {self.config.thumbnail.out_size}, the network "
+                                 f"reads {IMAGE_SIZE} x {IMAGE_SIZE}")
             self._dense = DenseGQCNN(network).eval()
         return model, self._dense
 
@@ -121,25 +133,23 @@ class FCGQCNNPolicy:
         poses = pose_vector(depths, approaches, cloud.table_normal)
         step = 2.0 * math.pi / cfg.rotations
         bins = np.mod(np.rint(angles / step).astype(np.intp), cfg.rotations)
-        pitch = cfg.thumbnail.crop_size / cfg.thumbnail.out_size
+        used = np.unique(bins)
         q = np.full(len(rows), -np.inf)
         depth = np.asarray(observation.depth, dtype=np.float32)
-        stats = model.stats
         with torch.no_grad():
-            for k in np.unique(bins):
+            for k in used:
                 mine = np.flatnonzero(bins == k)
-                points_uv, windows = lattice_positions(pixels[mine], k * step, pitch, cfg.thumbnail.out_size)
+                points_uv, windows = lattice_positions(pixels[mine], k * step, cfg.thumbnail)
                 lattice = ndimage.map_coordinates(depth, [points_uv[..., 1], points_uv[..., 0]], order=1,
                                                   mode="nearest").astype(np.float32)
-                image = torch.from_numpy(lattice)[None, None]
-                pose = torch.from_numpy(poses[mine])
-                image, pose = stats.normalise(image, pose)
-                maps = dense.trunk(image)
+                image, pose = model.stats.normalise(torch.from_numpy(lattice)[None, None],
+                                                    torch.from_numpy(poses[mine]))
                 at = torch.from_numpy(windows)
-                logits = dense.head(maps, torch.zeros(len(mine), dtype=torch.long), at[:, 0], at[:, 1], pose)
+                logits = dense.head(dense.trunk(image), torch.zeros(len(mine), dtype=torch.long), at[:, 0], at[:, 1],
+                                    pose)
                 q[mine] = torch.softmax(logits, dim=1)[:, 1].double().numpy()
         return {"rows": rows, "cols": cols, "pixels": pixels, "points": points, "approaches": approaches,
-                "poses": poses, "q": q, "rotations": len(np.unique(bins))}
+                "poses": poses, "q": q, "rotations": len(used)}
 
     def plan(self, observation: Observation, rng: np.random.Generator) -> GraspAction:
         start = time.perf_counter()
@@ -148,12 +158,11 @@ class FCGQCNNPolicy:
         dense = self.quality(observation, cloud)
         q_map = np.full(cloud.valid.shape, np.nan, dtype=np.float32)
         q_map[dense["rows"], dense["cols"]] = dense["q"]
-        order = np.argsort(-dense["q"], kind="stable")
-        best, q = int(order[0]), float(dense["q"][order[0]])
+        best, q = int(np.argmax(dense["q"])), float(dense["q"].max())
         if cfg.refine:
-            top = order[: cfg.refine]
-            exact = GQCNNPolicy(self.model, CEMConfig(thumbnail=cfg.thumbnail, sampler=cfg.sampler)).score(
-                observation, cloud, dense["rows"][top], dense["cols"][top])
+            count = min(cfg.refine, len(dense["q"]))
+            top = np.argpartition(-dense["q"], count - 1)[:count]
+            exact = self.exact.score(observation, cloud, dense["rows"][top], dense["cols"][top])
             pick = int(np.argmax(exact["q"]))
             best, q = int(top[pick]), float(exact["q"][pick])
         return GraspAction(
@@ -169,9 +178,5 @@ class FCGQCNNPolicy:
 def make_fc_gqcnn_policy(model: Any | str | Path | None = None, config: DenseConfig | None = None,
                          **overrides: Any) -> FCGQCNNPolicy:
     """Registry factory for "fc-gqcnn": `model` a loaded model (`load_model`), a model directory
-    (loaded on first use), or None for the shipped default."""
-    if model is None:
-        model = default_model_dir()
-    if isinstance(model, str | Path):
-        model = LazyModel(model)
-    return FCGQCNNPolicy(model, config, **overrides)
+    (loaded on first use), or None for the shipped default (InputError if it is not installed)."""
+    return FCGQCNNPolicy(resolve_model(model), config, **overrides)

@@ -14,8 +14,8 @@ Algorithm (one `plan`)
    with the table normal brought into the camera frame by the camera pose). One batched
    `model.predict(thumbnails, poses)` gives each grasp's success probability. A model with
    ``image_channels == 2`` (the context nets) also gets each grasp's context thumbnail
-   (`extract_context_thumbnails`, same pixel and angle, 288 px crop of 9 x 9 block means) as
-   channel 1: thumbnails (N, 2, 32, 32), as in training.
+   (`extract_context_thumbnails`, same pixel and angle, 288 px crop of 9 x 9 block means, the
+   image filtered once per plan) as channel 1: thumbnails (N, 2, 32, 32), as in training.
 3. `num_iters` times: take the top `elite_fraction` of the current set (ceil, at least 1), fit a
    Gaussian mixture with ceil(`gmm_component_frac` x elites) components to their pixel centres
    (u, v), the only features, standardised by the elites' mean and standard deviation (a zero
@@ -63,7 +63,7 @@ from suctionbench.sensing.thumbnails import (
     THUMBNAIL_CONTEXT,
     THUMBNAIL_GQCNN,
     ThumbnailConfig,
-    extract_context_thumbnails,
+    context_image,
     extract_thumbnails,
     pose_vector,
     project_grasps,
@@ -311,19 +311,23 @@ class GQCNNPolicy:
         return f"GQCNNPolicy({self.model!r}, {self.config})"
 
     def score(
-        self, observation: Observation, cloud: SceneCloud, rows: np.ndarray, cols: np.ndarray
+        self, observation: Observation, cloud: SceneCloud, rows: np.ndarray, cols: np.ndarray,
+        context: np.ndarray | None = None,
     ) -> dict[str, np.ndarray]:
         """Grasps at pixels (rows, cols) with their pose vectors and predicted quality.
 
         Thumbnails (N, 32, 32) for a one-channel model; for a two-channel one (N, 2, 32, 32), the
-        grasp thumbnail and the context thumbnail of the same grasp.
+        grasp thumbnail and the context thumbnail of the same grasp, cut from `context` (the
+        observation's `context_image`, filtered here if not given: `plan` filters once).
         """
         pixels, points, approaches = cloud.grasps_at(rows, cols)
         _, depths, angles = project_grasps(points, approaches, cloud.intrinsics)
         thumbnails = extract_thumbnails(observation.depth, pixels, angles, self.config.thumbnail)
         if image_channels(self.model) == 2:
-            context = extract_context_thumbnails(observation.depth, pixels, angles, self.config.context_thumbnail)
-            thumbnails = np.stack([thumbnails, context], axis=1)
+            if context is None:
+                context = context_image(observation.depth, self.config.context_thumbnail)
+            wide = extract_thumbnails(context, pixels, angles, self.config.context_thumbnail)
+            thumbnails = np.stack([thumbnails, wide], axis=1)
         poses = pose_vector(depths, approaches, cloud.table_normal)
         q = np.asarray(self.model.predict(thumbnails, poses), dtype=float).reshape(-1)
         if q.shape != (len(rows),):
@@ -352,8 +356,9 @@ class GQCNNPolicy:
         start = time.perf_counter()
         cfg = self.config
         cloud = scene_cloud(observation, cfg.sampler)
+        context = context_image(observation.depth, cfg.context_thumbnail) if image_channels(self.model) == 2 else None
         rows, cols = cloud.sample(cfg.num_seed_samples, rng)
-        rounds = [self.score(observation, cloud, rows, cols)]
+        rounds = [self.score(observation, cloud, rows, cols, context)]
         for _ in range(cfg.num_iters):
             q = rounds[-1]["q"]
             elite = np.argsort(-q, kind="stable")[: cfg.elite_count(len(q))]
@@ -365,7 +370,7 @@ class GQCNNPolicy:
             rows, cols = self._resample(gmm, mean, std, cloud, rng)
             if len(rows) == 0:
                 break
-            rounds.append(self.score(observation, cloud, rows, cols))
+            rounds.append(self.score(observation, cloud, rows, cols, context))
         candidates = {key: np.concatenate([r[key] for r in rounds]) for key in rounds[0]}
         candidates["iteration"] = np.concatenate([np.full(len(r["q"]), i) for i, r in enumerate(rounds)])
         best = int(np.argmax(candidates["q"]))
@@ -386,6 +391,13 @@ def make_gqcnn_policy(
     """Registry factory for "gqcnn": `model` is a model object (anything with `predict`), a model
     directory (loaded on first use), or None for the shipped default (assets/models/gqcnn-compact).
     A missing directory raises InputError."""
+    return GQCNNPolicy(resolve_model(model), config, **overrides)
+
+
+def resolve_model(model: GraspQualityModel | str | Path | None) -> GraspQualityModel:
+    """The model a GQ-CNN policy factory was given: a model object as it is, a model directory
+    loaded on first use (`LazyModel`), or None for the shipped default (InputError if it is not
+    installed)."""
     if model is None:
         path = default_model_dir()
         if not path.exists():
@@ -393,7 +405,5 @@ def make_gqcnn_policy(
                 f"GQ-CNN policy: no model given and the default model '{path}' is not installed; "
                 "pass model=PATH to a trained model directory"
             )
-        model = LazyModel(path)
-    elif isinstance(model, str | Path):
-        model = LazyModel(model)
-    return GQCNNPolicy(model, config, **overrides)
+        return LazyModel(path)
+    return LazyModel(model) if isinstance(model, str | Path) else model

@@ -158,6 +158,14 @@ def visible_mask(
     return inside & (seen > 0) & (np.abs(seen - depths) <= tol)
 
 
+def thumbnail_axes(angles: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+    """Image directions (..., 2) = (du, dv) of a thumbnail's +row axis, d = (cos, sin) (the
+    approach's image direction), and its +column axis, e = (sin, -cos), for image angles `angles`
+    (module doc, "Thumbnail geometry")."""
+    cos, sin = np.cos(angles), np.sin(angles)
+    return np.stack([cos, sin], axis=-1), np.stack([sin, -cos], axis=-1)
+
+
 def _sample_coordinates(pixels: np.ndarray, angles: np.ndarray, config: ThumbnailConfig) -> np.ndarray:
     """Image coordinates (2, N, n, n) = (row, column) sampled by each thumbnail pixel (see the
     module docstring for the geometry)."""
@@ -217,9 +225,15 @@ def extract_context_thumbnails(
     depth image box-filtered over each thumbnail pixel's block (crop / n image pixels square), so a
     pixel is its block's mean depth rather than one point of it (point samples 9 pixels apart would
     alias sensor noise and thin edges). The filter runs once per image, whatever the grasp count."""
+    return extract_thumbnails(context_image(depth_image, config), pixels, angles, config)
+
+
+def context_image(depth_image: np.ndarray, config: ThumbnailConfig = THUMBNAIL_CONTEXT) -> np.ndarray:
+    """The depth image (H, W) float32 box-filtered over a context thumbnail pixel's block (crop / n
+    image pixels square), which `extract_context_thumbnails` samples: computed once per image, it
+    serves any number of grasps and calls (`extract_thumbnails` on it with `config`)."""
     size = max(1, int(round(config.crop_size / config.out_size)))
-    smoothed = ndimage.uniform_filter(np.asarray(depth_image, dtype=np.float32), size=size, mode="nearest")
-    return extract_thumbnails(smoothed, pixels, angles, config)
+    return ndimage.uniform_filter(np.asarray(depth_image, dtype=np.float32), size=size, mode="nearest")
 
 
 def extract_thumbnails_reference(
@@ -234,8 +248,7 @@ def extract_thumbnails_reference(
     for i, ((u, v), theta) in enumerate(zip(np.asarray(pixels, float), np.asarray(angles, float), strict=True)):
         if not (np.isfinite([u, v, theta]).all()):
             continue
-        d = np.array([math.sin(theta), math.cos(theta)])  # thumbnail +row direction, as image (row, col)
-        e = np.array([-math.cos(theta), math.sin(theta)])  # thumbnail +col direction, as image (row, col)
+        d, e = (axis[::-1] for axis in thumbnail_axes(theta))  # thumbnail +row, +col, as image (row, col)
         matrix = step * np.column_stack([d, e])  # image (row, col) per thumbnail (row, col)
         offset = np.array([v, u]) - matrix @ np.array([c, c])
         out[i] = ndimage.affine_transform(depth_image, matrix, offset, output_shape=(n, n), order=1, mode="nearest")

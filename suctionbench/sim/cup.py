@@ -500,16 +500,27 @@ class SuctionController:
         self.sealed = self.candidate if sealed else -1
         return self.sealed
 
+    def release(self, data: mujoco.MjData) -> None:
+        """Vent and hold nothing, with no stop force left on the bellows: the cup's state after a
+        reset or a retract (its next `update` drives it from there)."""
+        self.commanded, self.sealed, self.candidate, self._next_test = False, -1, -1, -math.inf
+        if len(self._tilt_dof):
+            data.qfrc_applied[self._tilt_dof] = 0.0
+
+    def bellows_tilt(self, data: mujoco.MjData) -> float:
+        """The bellows' tilt (rad): the size of its two hinges' tilt vector."""
+        tilt = data.qpos[self._tilt_qpos]
+        return math.hypot(tilt[0], tilt[1]) if len(tilt) else 0.0
+
     def apply_stop(self, data: mujoco.MjData) -> None:
         """The bellows' stop as a spring (`CupConfig.stop_stiffness`, damped by the silicone's
         loss) on the tilt beyond `approach_tolerance`, round in every azimuth (the tilt vector of
         the two hinges): set as the hinges' applied force, zero inside the stop."""
-        tilt = data.qpos[self._tilt_qpos]
-        size = math.hypot(tilt[0], tilt[1])
+        size = self.bellows_tilt(data)
         if size <= self._stop_at:
             data.qfrc_applied[self._tilt_dof] = 0.0
             return
-        axis = tilt / size
+        axis = data.qpos[self._tilt_qpos] / size
         speed = float(data.qvel[self._tilt_dof] @ axis)
         moment = self._stop_rate * (size - self._stop_at) + self._stop_damping * speed
         data.qfrc_applied[self._tilt_dof] = -moment * axis

@@ -234,8 +234,7 @@ class PickEpisode:
         self.data.qpos[:] = self.scene.home_qpos
         self.data.ctrl[:] = self.scene.home_ctrl
         self.data.qpos[self.arm_qpos] = self._ready_configuration()
-        self.cup.commanded = False
-        self.cup.sealed = -1
+        self.cup.release(self.data)
         self.trajectory = []
         self.watch_collisions = False
         cx, cy = self.scene.config.workspace_centre
@@ -495,6 +494,12 @@ class PickEpisode:
             wall_time=time.perf_counter() - start_wall, detail=detail, phases=phases,
             peak_acceleration=self._peak_accelerations(),
         )
+
+    @property
+    def motion(self) -> str | None:
+        """The motion carrying the object at this step ("lift", "transport"), None otherwise: what
+        a recorder reads to tell the carrying motions apart."""
+        return self._motion
 
     def execute_measuring_landing(self, point: np.ndarray, approach: np.ndarray) -> tuple[float | None, EpisodeResult]:
         """`execute`, also returning the landing offset: the bellows axis' distance (m) from `point`

@@ -21,7 +21,7 @@ def test_dense_equals_thumbnail_network_at_every_position():
                                                           indexing="ij"))
     poses = torch.randn(len(batch), 2, generator=gen)
     with torch.no_grad():
-        got = dense.head(dense.trunk(images), batch, r, c, poses)
+        got = dense.head([dense.streams[0].trunk(images)], [(batch, r, c)], poses)
         windows = torch.stack([images[b, :, i:i + IMAGE_SIZE, j:j + IMAGE_SIZE]
                                for b, i, j in zip(batch.tolist(), r.tolist(), c.tolist(), strict=True)])
         want = net(windows, poses)
@@ -29,7 +29,35 @@ def test_dense_equals_thumbnail_network_at_every_position():
     torch.testing.assert_close(got, want, rtol=1e-5, atol=1e-5)
 
 
-@pytest.mark.parametrize("arch", ["dn3", "context"])
-def test_networks_that_do_not_convert_exactly_are_refused(arch):
-    with pytest.raises(InputError, match="dense GQ-CNN"):
-        DenseGQCNN(build_model(arch, torch.Generator().manual_seed(0)))
+def test_dense_context_net_equals_two_stream_network():
+    # A context net's two streams each run densely over their own image (the context lattice is
+    # coarser, so its maps have another size) and each position reads its own window in each; the
+    # head must give the two-stream network's logits on the (grasp, context) window pair.
+    gen = torch.Generator().manual_seed(4)
+    net = build_model("context", gen).eval()
+    dense = DenseGQCNN(net).eval()
+    assert len(dense.streams) == 2
+    grasp, context = torch.randn(1, 1, 40, 44, generator=gen), torch.randn(1, 1, 35, 37, generator=gen)
+    count = 50
+    gr = torch.randint(0, 40 - IMAGE_SIZE + 1, (count,), generator=gen)
+    gc = torch.randint(0, 44 - IMAGE_SIZE + 1, (count,), generator=gen)
+    cr = torch.randint(0, 35 - IMAGE_SIZE + 1, (count,), generator=gen)
+    cc = torch.randint(0, 37 - IMAGE_SIZE + 1, (count,), generator=gen)
+    zero = torch.zeros(count, dtype=torch.long)
+    poses = torch.randn(count, 2, generator=gen)
+    with torch.no_grad():
+        got = dense.head([dense.streams[0].trunk(grasp), dense.streams[1].trunk(context)],
+                         [(zero, gr, gc), (zero, cr, cc)], poses)
+        pairs = torch.stack([torch.cat([grasp[0, :, a:a + IMAGE_SIZE, b:b + IMAGE_SIZE],
+                                        context[0, :, c:c + IMAGE_SIZE, d:d + IMAGE_SIZE]])
+                             for a, b, c, d in zip(gr.tolist(), gc.tolist(), cr.tolist(), cc.tolist(), strict=True)])
+        want = net(pairs, poses)
+    torch.testing.assert_close(got, want, rtol=1e-5, atol=1e-5)
+    with pytest.raises(ValueError, match="2 image streams"):
+        dense.head([dense.streams[0].trunk(grasp)], [(zero, gr, gc)], poses)
+
+
+def test_same_padded_network_is_refused():
+    # dn3's SAME padding reads zeros at a thumbnail's border where the whole image has neighbours.
+    with pytest.raises(InputError, match="dense GQ-CNN: only VALID"):
+        DenseGQCNN(build_model("dn3", torch.Generator().manual_seed(0)))

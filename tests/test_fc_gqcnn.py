@@ -36,11 +36,11 @@ def test_lattice_window_is_the_thumbnail_of_its_centre():
         np.testing.assert_allclose(lattice[a0:a0 + 32, b0:b0 + 32], want, rtol=0, atol=1e-6)
 
 
-def _window_centre(points: np.ndarray, a0: int, b0: int, angle: float) -> np.ndarray:
+def _window_centre(points: np.ndarray, a0: int, b0: int, angle: float, pitch: float = 3.0) -> np.ndarray:
     """Image (u, v) of the centre of lattice window (a0, b0): its top-left sample plus 15.5 pitches
     along the thumbnail's row and column axes (an independent reading of the geometry)."""
-    return points[a0, b0] + 3.0 * 15.5 * (np.array([math.cos(angle), math.sin(angle)])
-                                          + np.array([math.sin(angle), -math.cos(angle)]))
+    return points[a0, b0] + pitch * 15.5 * (np.array([math.cos(angle), math.sin(angle)])
+                                            + np.array([math.sin(angle), -math.cos(angle)]))
 
 
 def test_dense_q_is_the_network_on_each_pixels_window():
@@ -69,6 +69,43 @@ def test_dense_q_is_the_network_on_each_pixels_window():
     np.testing.assert_allclose(dense["q"][pick], want, rtol=0, atol=1e-5)
     action = policy.plan(observation, np.random.default_rng(0))
     assert action.q == pytest.approx(float(dense["q"].max()))
+
+
+def test_dense_q_of_a_context_net_reads_both_lattices():
+    # A two-stream (context) net: each pixel's dense q is the network's on the pair (grasp thumbnail
+    # centred on its 3-px-lattice window, context thumbnail centred on its 9-px-lattice window of
+    # the box-filtered image), both at the bin's angle, with the pixel's own pose.
+    from suctionbench.learning.checkpoint import GQCNNModel
+    from suctionbench.learning.data import NormStats
+    from suctionbench.learning.models import build_model
+    from suctionbench.sensing.thumbnails import THUMBNAIL_CONTEXT, extract_context_thumbnails
+
+    stats = NormStats((0.57, 0.59), (0.02, 0.01), (0.57, 0.2), (0.02, 0.1), count=1)
+    model = GQCNNModel(build_model("context", torch.Generator().manual_seed(2)), stats, {"arch": "context"})
+    policy = make_policy("fc-gqcnn", model=model, refine=0)
+    scene = Scene("basic/box_tea")
+    observation = scene.observation(mask=scene.mask)
+    cloud = scene_cloud(observation, policy.config.sampler)
+    dense = policy.quality(observation, cloud)
+    _, _, angles = project_grasps(dense["points"], dense["approaches"], cloud.intrinsics)
+    step = 2 * math.pi / policy.config.rotations
+    bins = np.mod(np.rint(angles / step).astype(int), policy.config.rotations)
+    pick = np.random.default_rng(1).choice(len(bins), size=40, replace=False)
+    grasp_centres, context_centres = [], []
+    for i in pick:
+        mine = np.flatnonzero(bins == bins[i])
+        for config, centres in ((THUMBNAIL_GQCNN, grasp_centres), (THUMBNAIL_CONTEXT, context_centres)):
+            points, windows = lattice_positions(dense["pixels"][mine], bins[i] * step, config)
+            a0, b0 = windows[np.searchsorted(mine, i)]
+            centres.append(_window_centre(points, a0, b0, bins[i] * step, pitch=1 / config.scale))
+    off = np.linalg.norm(np.array(context_centres) - dense["pixels"][pick], axis=1)
+    assert off.max() <= 9 * math.sqrt(2) / 2 + 1e-9  # half the context lattice's diagonal
+    turn = bins[pick] * step
+    pairs = np.stack([extract_thumbnails(observation.depth, np.array(grasp_centres), turn),
+                      extract_context_thumbnails(observation.depth, np.array(context_centres), turn)], axis=1)
+    want = model.predict(pairs, dense["poses"][pick])
+    assert want.std() > 1e-3  # the check can tell positions apart
+    np.testing.assert_allclose(dense["q"][pick], want, rtol=0, atol=1e-5)
 
 
 @pytest.fixture(scope="module")

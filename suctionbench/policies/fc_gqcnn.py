@@ -13,14 +13,20 @@ Algorithm (one `plan`)
    bin's angle, covering that bin's pixels. Every 32 x 32 window of the lattice is then the
    thumbnail of the grasp at its centre, and `learning.dense.DenseGQCNN` scores them all: its
    trunk once per lattice, its head at the window nearest each pixel (at most 2.1 pixels off, the
-   half-diagonal of the 3-pixel pitch).
+   half-diagonal of the 3-pixel pitch). About 9 neighbouring pixels share a window, so its fully
+   connected features are computed once and only the pose stream and merge run per pixel.
 3. The quality map is q at every valid pixel (NaN elsewhere). The `refine` best pixels are scored
    again exactly (their own thumbnails at their own angles, `GQCNNPolicy.score`), and the best of
    those is the grasp, so the reported q is the network's own for the grasp executed (with
    `refine` 0, the dense map's best and its dense q).
 
-The model is a trained one-image-stream, VALID-padded GQ-CNN (`compact`; `load_model`), the same
-the CEM policy reads; `make_fc_gqcnn_policy()` loads the shipped one.
+A context network (two image streams) gets a second lattice per bin, of the context thumbnail's
+9-pixel pitch, resampled from the box-filtered image (`thumbnails.context_image`) as its context
+thumbnails are; each pixel reads its nearest window of each lattice (the context window at most
+6.4 pixels off, under a context thumbnail pixel).
+
+The model is a trained VALID-padded GQ-CNN (`compact`, `context`, `context-wide`; `load_model`),
+the same the CEM policy reads; `make_fc_gqcnn_policy()` loads the shipped one.
 """
 
 from __future__ import annotations
@@ -39,8 +45,10 @@ from suctionbench.errors import InputError
 from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, scene_cloud
 from suctionbench.policies.gqcnn import CEMConfig, GQCNNPolicy, LazyModel, resolve_model
 from suctionbench.sensing.thumbnails import (
+    THUMBNAIL_CONTEXT,
     THUMBNAIL_GQCNN,
     ThumbnailConfig,
+    context_image,
     pose_vector,
     project_grasps,
     thumbnail_axes,
@@ -62,6 +70,10 @@ class DenseConfig:
 
     thumbnail: ThumbnailConfig = THUMBNAIL_GQCNN
     """The thumbnail the network was trained on (its crop and size set the lattice's pitch)."""
+
+    context_thumbnail: ThumbnailConfig = THUMBNAIL_CONTEXT
+    """The context thumbnail a two-stream (context) network was trained on: its own lattice, 3x
+    coarser, sampled from the box-filtered image (`thumbnails.context_image`)."""
 
     def __post_init__(self) -> None:
         if not (isinstance(self.rotations, int) and self.rotations >= 1):
@@ -98,7 +110,9 @@ class FCGQCNNPolicy:
     def __init__(self, model: Any, config: DenseConfig | None = None, **overrides: Any) -> None:
         self.model = model
         self.config = dataclasses.replace(config or DenseConfig(), **overrides)
-        self.exact = GQCNNPolicy(model, CEMConfig(thumbnail=self.config.thumbnail, sampler=self.config.sampler))
+        cfg = self.config
+        self.exact = GQCNNPolicy(model, CEMConfig(thumbnail=cfg.thumbnail, context_thumbnail=cfg.context_thumbnail,
+                                                  sampler=cfg.sampler))
         """Scores the refined pixels with their own thumbnails (the CEM policy's scoring)."""
         self._dense = None
 
@@ -115,9 +129,10 @@ class FCGQCNNPolicy:
             network = getattr(model, "network", None)
             if network is None:
                 raise InputError(f"dense policy: model {model!r} has no network to convert (a trained GQ-CNN)")
-            if self.config.thumbnail.out_size != IMAGE_SIZE:
-                raise InputError(f"dense policy: thumbnail size {self.config.thumbnail.out_size}, the network "
-                                 f"reads {IMAGE_SIZE} x {IMAGE_SIZE}")
+            for thumbnail in (self.config.thumbnail, self.config.context_thumbnail):
+                if thumbnail.out_size != IMAGE_SIZE:
+                    raise InputError(f"dense policy: thumbnail size {thumbnail.out_size}, the network reads "
+                                     f"{IMAGE_SIZE} x {IMAGE_SIZE}")
             self._dense = DenseGQCNN(network).eval()
         return model, self._dense
 
@@ -136,17 +151,29 @@ class FCGQCNNPolicy:
         used = np.unique(bins)
         q = np.full(len(rows), -np.inf)
         depth = np.asarray(observation.depth, dtype=np.float32)
+        views = [(cfg.thumbnail, depth)]  # (thumbnail geometry, image it samples) per image stream
+        if len(dense.streams) == 2:
+            views.append((cfg.context_thumbnail, context_image(depth, cfg.context_thumbnail)))
+        image_mean = np.atleast_1d(model.stats.image_mean)
+        image_std = np.atleast_1d(model.stats.image_std)
+        pose_in = torch.from_numpy(((poses - model.stats.pose_mean) / model.stats.pose_std).astype(np.float32))
         with torch.no_grad():
             for k in used:
                 mine = np.flatnonzero(bins == k)
-                points_uv, windows = lattice_positions(pixels[mine], k * step, cfg.thumbnail)
-                lattice = ndimage.map_coordinates(depth, [points_uv[..., 1], points_uv[..., 0]], order=1,
-                                                  mode="nearest").astype(np.float32)
-                image, pose = model.stats.normalise(torch.from_numpy(lattice)[None, None],
-                                                    torch.from_numpy(poses[mine]))
-                at = torch.from_numpy(windows)
-                logits = dense.head(dense.trunk(image), torch.zeros(len(mine), dtype=torch.long), at[:, 0], at[:, 1],
-                                    pose)
+                features = []
+                for stream, (thumbnail, image) in enumerate(views):
+                    points_uv, at = lattice_positions(pixels[mine], k * step, thumbnail)
+                    lattice = ndimage.map_coordinates(image, [points_uv[..., 1], points_uv[..., 0]], order=1,
+                                                      mode="nearest")
+                    lattice = ((lattice - image_mean[stream]) / image_std[stream]).astype(np.float32)
+                    maps = dense.streams[stream].trunk(torch.from_numpy(lattice)[None, None])
+                    # ~(pitch)^2 neighbouring pixels share a window: its features are computed once
+                    width = lattice.shape[1]
+                    flat, share = np.unique(at[:, 0] * width + at[:, 1], return_inverse=True)
+                    at = torch.from_numpy(np.column_stack(np.divmod(flat, width)))
+                    zeros = torch.zeros(len(at), dtype=torch.long)
+                    features.append(dense.streams[stream].features(maps, zeros, at[:, 0], at[:, 1])[share])
+                logits = dense.merge(features, pose_in[mine])
                 q[mine] = torch.softmax(logits, dim=1)[:, 1].double().numpy()
         return {"rows": rows, "cols": cols, "pixels": pixels, "points": points, "approaches": approaches,
                 "poses": poses, "q": q, "rotations": len(used)}

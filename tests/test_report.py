@@ -165,3 +165,34 @@ def test_report_opens_with_the_headline_figure_and_ends_with_command_and_version
     assert "FACTS" not in page and "shared/" not in page and "Mahler et al." in page
     markdown = (out / "report.md").read_text()
     assert markdown.index("headline.png") < markdown.index("| policy |") < markdown.index("## Runs and versions")
+
+
+def test_quality_overlay_colours_and_marks():
+    # q 0 is drawn red, q 1 green, unscored pixels grey (depth), and the executed grasp a white cross.
+    from suctionbench.evaluation.figures import QUALITY_MARGIN, QUALITY_ZOOM, quality_overlay
+
+    depth = np.full((100, 120), 0.7, dtype=np.float32)
+    quality = np.full(depth.shape, np.nan, dtype=np.float32)
+    quality[40:60, 50:60], quality[40:60, 60:70] = 0.0, 1.0
+    image = quality_overlay(depth, quality, (65.0, 45.0))
+    side = (20 + 2 * QUALITY_MARGIN) * QUALITY_ZOOM
+    assert image.shape == (side, side, 3) and image.dtype == np.uint8
+    at = lambda u, v: image[(v - 40 + QUALITY_MARGIN) * QUALITY_ZOOM, (u - 50 + QUALITY_MARGIN) * QUALITY_ZOOM]  # noqa: E731
+    red, green, grey, cross = at(52, 58), at(68, 58), at(45, 50), at(65, 45)
+    assert red[0] > 200 and red[1] < 80 and green[1] > 200 and green[0] < 80
+    assert grey[0] == grey[1] == grey[2] and tuple(cross) == (255, 255, 255)
+    with pytest.raises(ValueError, match="no scored pixel"):
+        quality_overlay(depth, np.full(depth.shape, np.nan), None)
+
+
+def test_report_shows_a_dense_policys_quality_maps(tmp_path):
+    # A smoke run of fc-gqcnn logs its quality map; the report draws it in its own gallery.
+    result = CliRunner().invoke(app, ["eval", "--policy", "fc-gqcnn", "--task", "smoke", "--workers", "1",
+                                      "--out", str(tmp_path / "run"), "--json"])
+    assert result.exit_code == 0, result.output
+    build_report([tmp_path / "run"], tmp_path / "report")
+    page = (tmp_path / "report" / "index.html").read_text()
+    names = re.findall(r'<img src="(quality_[^"]+)"', page)
+    assert names and "Quality maps" in page and "Quality maps" in (tmp_path / "report" / "report.md").read_text()
+    picture = np.asarray(Image.open(tmp_path / "report" / names[0]))
+    assert picture.ndim == 3 and (picture == 255).all(axis=2).any()  # in colour, with the grasp's cross

@@ -10,7 +10,15 @@ from mcap.reader import make_reader
 from scipy.spatial.transform import Rotation
 
 from suctionbench.errors import InputError
-from suctionbench.runlog import EpisodeLog, depth_image, grasp_table, iter_messages, read_episode, read_run
+from suctionbench.runlog import (
+    EpisodeLog,
+    depth_image,
+    float_image,
+    grasp_table,
+    iter_messages,
+    read_episode,
+    read_run,
+)
 
 N_STATES = 30
 DURATION = 3.0
@@ -229,17 +237,45 @@ def test_every_message_is_valid_against_the_published_schemas(episode):
     assert sum(checked.values()) == 6 + (N_STATES + 1) + 2 * N_STATES  # every message of the log
 
 
-def test_a_real_pick_log_is_valid_against_the_published_schemas(tmp_path):
+@pytest.mark.parametrize("policy", ["planarity-centroid", "fc-gqcnn"])
+def test_a_real_pick_log_is_valid_against_the_published_schemas(tmp_path, policy):
     from suctionbench.sim.pick import PickRequest, PickRunner
 
     path = tmp_path / "pick.mcap"
-    PickRunner(PickRequest("basic/box_tea", policy="planarity-centroid", seed=4)).run(log=path)
+    PickRunner(PickRequest("basic/box_tea", policy=policy, seed=4)).run(log=path)
     checked = _validate_every_message(path)
     for name in ("foxglove.RawImage", "foxglove.CameraCalibration", "foxglove.FrameTransforms", "foxglove.SceneUpdate"):
         assert checked.get(name, 0) >= 1, (name, checked)
     [(_, scene)] = list(iter_messages(path, "/grasps/candidates"))[:1]
     entity = scene["entities"][0]
     assert entity["arrows"] and all(entity[k] == [] for k in ("cubes", "spheres", "cylinders", "lines", "texts"))
+    maps = list(iter_messages(path, "/grasps/quality_map"))
+    if policy != "fc-gqcnn":  # only a dense policy has a quality map
+        assert maps == []
+        return
+    # the dense policy's map: one q per candidate pixel, on the depth image's grid, the rest NaN
+    [(_, message)] = maps
+    quality = float_image(message, "quality map")
+    [(_, depth)] = list(iter_messages(path, "/camera/depth"))[:1]
+    assert quality.shape == depth_image(depth).shape
+    [(_, table)] = list(iter_messages(path, "/grasps/table"))
+    q = grasp_table(table)["q"]
+    assert np.isfinite(quality).sum() == len(q)
+    np.testing.assert_allclose(np.sort(quality[np.isfinite(quality)]), np.sort(q.astype(np.float32)), atol=1e-6)
+
+
+def test_quality_map_round_trips_exactly(tmp_path):
+    rng = np.random.default_rng(2)
+    quality = rng.uniform(size=(30, 40)).astype(np.float32)
+    quality[rng.uniform(size=quality.shape) < 0.5] = np.nan
+    with EpisodeLog(tmp_path / "q.mcap", {}) as log:
+        log.log_quality_map(0.0, quality)
+        with pytest.raises(ValueError, match="quality map has shape"):
+            log.log_quality_map(0.0, quality[0])
+    [(_, message)] = list(iter_messages(tmp_path / "q.mcap", "/grasps/quality_map"))
+    np.testing.assert_array_equal(float_image(message), quality)  # NaN where NaN, bit-exact elsewhere
+    with pytest.raises(InputError, match="quality map message has encoding"):
+        float_image({**message, "encoding": "mono8"}, "quality map")
 
 
 def test_a_wrong_message_fails_the_published_schema():

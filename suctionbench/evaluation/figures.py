@@ -1,5 +1,6 @@
 """Figures of the report: the headline figure (success and AP per policy and set beside the paper's
-physical results) and small shaded thumbnails of the objects (ray cast, no OpenGL needed)."""
+physical results), small shaded thumbnails of the objects (ray cast, no OpenGL needed) and a dense
+policy's quality map over the depth image it planned on."""
 
 from __future__ import annotations
 
@@ -45,6 +46,43 @@ def object_thumbnail(mesh: Any, size: int = 96) -> np.ndarray:
     base = np.array([95.0, 140.0, 200.0])  # a muted blue
     colour = np.where(hit[:, None], shade[:, None] * base[None, :] + (1 - shade[:, None]) * 20, 255.0)
     return colour.reshape(size, size, 3).clip(0, 255).astype(np.uint8)
+
+
+QUALITY_MARGIN = 12
+"""Pixels of depth shown around the scored region of a quality map."""
+
+QUALITY_ZOOM = 2
+"""Each image pixel of a quality-map figure is drawn as this many pixels square."""
+
+
+def quality_overlay(depth: np.ndarray, quality: np.ndarray, pixel: tuple[float, float] | None) -> np.ndarray:
+    """An RGB uint8 picture of a quality map (H, W; q in [0, 1], NaN unscored) over its depth image:
+    the square around the scored pixels (plus QUALITY_MARGIN), depth in grey (near light), each
+    scored pixel coloured from red (q 0) through yellow to green (q 1), the executed grasp's image
+    `pixel` (u, v) marked by a white cross; enlarged QUALITY_ZOOM times."""
+    scored = np.isfinite(quality)
+    if not scored.any():
+        raise ValueError("quality map has no scored pixel")
+    rows, cols = np.nonzero(scored)
+    side = max(rows.max() - rows.min(), cols.max() - cols.min()) + 1 + 2 * QUALITY_MARGIN
+    r0 = max((rows.min() + rows.max() + 1) // 2 - side // 2, 0)
+    c0 = max((cols.min() + cols.max() + 1) // 2 - side // 2, 0)
+    window = (slice(r0, r0 + side), slice(c0, c0 + side))  # clipped at the image's far edges
+    d, q, seen = depth[window], quality[window], scored[window]
+    valid = np.isfinite(d) & (d > 0)
+    lo, hi = (d[valid].min(), d[valid].max()) if valid.any() else (0.0, 1.0)
+    grey = np.where(valid, 230 - 160 * (d - lo) / max(hi - lo, 1e-9), 0)
+    image = np.repeat(grey[..., None], 3, axis=2)
+    value = np.clip(np.nan_to_num(q), 0, 1)
+    heat = np.stack([np.clip(2 * (1 - value), 0, 1), np.clip(2 * value, 0, 1), np.zeros_like(value)], axis=-1)
+    image[seen] = 0.25 * image[seen] + 0.75 * 255 * heat[seen]
+    if pixel is not None:
+        u, v = int(round(pixel[0])) - c0, int(round(pixel[1])) - r0
+        for dv, du in [(k, 0) for k in range(-4, 5)] + [(0, k) for k in range(-4, 5)]:
+            if 0 <= v + dv < image.shape[0] and 0 <= u + du < image.shape[1]:
+                image[v + dv, u + du] = 255
+    image = np.repeat(np.repeat(image, QUALITY_ZOOM, axis=0), QUALITY_ZOOM, axis=1)
+    return image.clip(0, 255).astype(np.uint8)
 
 
 SET_ORDER = ("basic", "typical", "adversarial")

@@ -8,6 +8,7 @@ The paper's numbers live in `suctionbench.evaluation.paper` with their source.""
 from __future__ import annotations
 
 import html
+import itertools
 import shlex
 import sys
 from dataclasses import dataclass, field
@@ -34,11 +35,19 @@ from suctionbench.validate import output_dir
 __all__ = ["PAPER_KNOWN", "PAPER_RANDOM", "PAPER_RESULTS", "build_report", "expand_run_dirs",
            "success_attempt_curve"]
 
-POLICY_ORDER = ("random", "planarity", "centroid", "planarity-centroid", "gqcnn")
+POLICY_ORDER = ("random", "planarity", "centroid", "planarity-centroid", "gqcnn", "fc-gqcnn")
 """Row order of the policies x sets table (the paper's, weakest baseline first)."""
 
 GALLERY_PER_RUN = 6
 """Failed trials of each run shown in the gallery."""
+
+QUALITY_MAPS_PER_RUN = 4
+"""Trials of a dense policy's run whose quality map the report shows (successes and failures)."""
+
+FAILURES = "Failures (depth around the executed grasp)"
+QUALITY_MAPS = ("Quality maps (dense policy: q per pixel from red 0 to green 1 over the depth it planned on; "
+                "white cross: the executed grasp)")
+"""Titles of the report's galleries."""
 
 
 @dataclass
@@ -198,7 +207,8 @@ def _write_report(run_dirs: list[Path], summaries: list[dict[str, Any]], all_rec
     from suctionbench.evaluation.figures import headline_figure
     from suctionbench.learning.metrics import precision_recall_curve
 
-    galleries, per_object = [], {}
+    galleries: dict[str, list[tuple[str, str]]] = {FAILURES: [], QUALITY_MAPS: []}  # title -> (png, caption)
+    per_object = {}
     curves: dict[str, list[tuple[str, np.ndarray, np.ndarray]]] = {}  # figure group -> (label, q, success)
     for run_dir, summary, records in zip(run_dirs, summaries, all_records, strict=True):
         valid = [r for r in records if r.get("valid")]
@@ -211,7 +221,9 @@ def _write_report(run_dirs: list[Path], summaries: list[dict[str, Any]], all_rec
         if keep.any() and success[keep].any():
             group = f"{summary['set']}_known" if known else summary["set"]
             curves.setdefault(group, []).append((label, q[keep], success[keep]))
-        galleries += _gallery(run_dir, [r for r in records if not r.get("success")], out, f"{label} / {summary['set']}")
+        caption = f"{label} / {summary['set']}"
+        galleries[FAILURES] += _gallery(run_dir, [r for r in records if not r.get("success")], out, caption)
+        galleries[QUALITY_MAPS] += _quality_gallery(run_dir, records, out, caption)
     figures = []
     headline = [{"policy": s["label"], "set": s["set"], "success": s["success_rate"], "ap": s["ap"]}
                 for s in summaries if s["policy"] not in ("analytic", "random-surface")]
@@ -305,20 +317,59 @@ def _gallery(run_dir: Path, failed: list[dict[str, Any]], out: Path, label: str)
     for r in [r for r in failed if r.get("grasp_world")][:GALLERY_PER_RUN]:  # failures that executed a grasp
         path = Path(r["log"])
         depth_msg = next(iter_messages(path, "/camera/depth"), None)  # the first frame: what the policy saw
-        calib = next(iter_messages(path, "/camera/calibration"), None)
-        if depth_msg is None or calib is None:
+        pixel = _grasp_pixel(path, r)
+        if depth_msg is None or pixel is None:
             continue
-        depth = depth_image(depth_msg[1])
-        k = np.asarray(calib[1]["K"], dtype=float).reshape(3, 3)
-        meta_pose = _camera_pose(path)
-        point = np.asarray(r["grasp_world"][:3])
-        p_cam = (point - meta_pose[:3, 3]) @ meta_pose[:3, :3]
-        u, v = (k @ p_cam)[:2] / p_cam[2]
-        crop = _crop(depth, int(round(u)), int(round(v)), 48)
+        crop = _crop(depth_image(depth_msg[1]), int(round(pixel[0])), int(round(pixel[1])), 48)
         name = f"fail_{run_dir.name}_{path.stem}.png"
         save_png(out / name, crop)
         items.append((name, f"{label}: {r['object']} - {r['failure']}"))
     return items
+
+
+def _quality_gallery(run_dir: Path, records: list[dict[str, Any]], out: Path, label: str) -> list[tuple[str, str]]:
+    """Quality maps (`figures.quality_overlay`) of up to QUALITY_MAPS_PER_RUN trials whose log has
+    one (a dense policy's), successes and failures alternating."""
+    from suctionbench.evaluation.figures import quality_overlay
+    from suctionbench.runlog.reader import depth_image, float_image, iter_messages
+    from suctionbench.runlog.writer import TOPIC_QUALITY_MAP
+    from suctionbench.sensing.image import save_png
+
+    executed = [r for r in records if r.get("grasp_world") and r.get("log")]
+    good, bad = [r for r in executed if r.get("success")], [r for r in executed if not r.get("success")]
+    chosen = [r for pair in itertools.zip_longest(good, bad) for r in pair if r is not None]
+    items = []
+    for r in chosen:
+        if len(items) == QUALITY_MAPS_PER_RUN:
+            break
+        path = Path(r["log"])
+        quality_msg = next(iter_messages(path, TOPIC_QUALITY_MAP), None)
+        if quality_msg is None:  # not a dense policy's log: none of this run's trials has one
+            break
+        depth_msg = next(iter_messages(path, "/camera/depth"), None)
+        quality = float_image(quality_msg[1], "quality map")
+        if depth_msg is None or not np.isfinite(quality).any():
+            continue
+        name = f"quality_{run_dir.name}_{path.stem}.png"
+        save_png(out / name, quality_overlay(depth_image(depth_msg[1]), quality, _grasp_pixel(path, r)))
+        outcome = "success" if r.get("success") else r.get("failure") or "failure"
+        q = r.get("policy_q")
+        items.append((name, f"{label}: {r['object']} - {outcome}" + ("" if q is None else f", q {q:.2f}")))
+    return items
+
+
+def _grasp_pixel(path: Path, record: dict[str, Any]) -> tuple[float, float] | None:
+    """Image (u, v) of a trial's executed grasp point in the camera of its log (None without one)."""
+    from suctionbench.runlog.reader import iter_messages
+
+    calib = next(iter_messages(path, "/camera/calibration"), None)
+    if calib is None or not record.get("grasp_world"):
+        return None
+    k = np.asarray(calib[1]["K"], dtype=float).reshape(3, 3)
+    pose = _camera_pose(path)
+    p_cam = (np.asarray(record["grasp_world"][:3]) - pose[:3, 3]) @ pose[:3, :3]
+    u, v = (k @ p_cam)[:2] / p_cam[2]
+    return float(u), float(v)
 
 
 def _camera_pose(path: Path) -> np.ndarray:
@@ -378,8 +429,10 @@ def _write_markdown(out: Path, tables: list[Table], figures, objects, galleries,
         image = f"![{card['object']}]({card['image']})" if card["image"] else ""
         counts = "<br>".join(f"{run}: {s}/{n}" for run, s, n in card["counts"])
         lines.append(f"| {card['object']} | {image} | {counts} |")
-    lines += ["", "## Failures (depth around the executed grasp)", ""]
-    lines += [f"![{caption}]({name}) {caption}  " for name, caption in galleries]
+    for title, items in galleries.items():
+        if items or title == FAILURES:
+            lines += ["", f"## {title}", ""]
+            lines += [f"![{caption}]({name}) {caption}  " for name, caption in items]
     lines += ["", "## Runs and versions", ""]
     for run in footer["runs"]:
         lines.append(f"- **{run['run']}**: {run['trials']} trials, seed {run['seed']}, camera {run['camera']}, "
@@ -411,8 +464,10 @@ def _write_html(out: Path, tables: list[Table], figures, objects, galleries, foo
         for c in objects
     )
     gallery = "".join(
-        f'<figure><img src="{esc(n)}" width="192" alt="{esc(c)}"><figcaption>{esc(c)}</figcaption></figure>'
-        for n, c in galleries
+        f"<h2>{esc(title)}</h2>" + "".join(
+            f'<figure><img src="{esc(n)}" width="192" alt="{esc(c)}"><figcaption>{esc(c)}</figcaption></figure>'
+            for n, c in items)
+        for title, items in galleries.items() if items or title == FAILURES
     )
     runs = "".join(
         f"<li><b>{esc(r['run'])}</b>: {r['trials']} trials, seed {esc(str(r['seed']))}, camera "
@@ -429,7 +484,7 @@ figure.object img{{flex:none}}code{{font-size:small;overflow-wrap:anywhere}}.cap
 footer{{margin-top:2em;border-top:1px solid #999;font-size:small}}</style></head><body>
 <h1>suctionbench report</h1><p>{esc(INTRO)}</p>
 {"".join(sections)}<h2>Curves</h2>{curves}
-<h2>Per object (successes / trials)</h2>{cards}<h2>Failures</h2>{gallery}
+<h2>Per object (successes / trials)</h2>{cards}{gallery}
 <footer><h2>Runs and versions</h2><ul>{runs}</ul><p>Report: <code>{esc(footer["report_command"])}</code></p>
 <p>Versions: {versions}</p></footer></body></html>"""
     with atomic_path(out / "index.html") as tmp:

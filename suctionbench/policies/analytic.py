@@ -29,6 +29,8 @@ class RankedGrasp:
     candidate_approaches: np.ndarray
     candidate_scores: np.ndarray | None
     chosen_index: int
+    quality_map: np.ndarray | None = None
+    """A dense policy's q per pixel of the depth image it planned on (NaN unscored), else None."""
 
 
 def surface_candidates(

@@ -9,8 +9,9 @@ Foxglove's *published* JSON Schema, vendored unchanged from the ``@foxglove/sche
 (``runlog/schemas/``, version and licence in its README), and every message satisfies it, required
 fields included, so strict consumers (the TypeScript ``@foxglove/schemas`` + ajv, Python
 ``jsonschema``) accept the log and Foxglove's Image and 3D panels render it directly; bytes fields
-(the depth image) are base64 strings tagged ``contentEncoding: base64``, which is how Foxglove
-reads bytes in JSON. Our own records (joint states, grasp table, suction state, episode result) are
+(the depth image, and a dense policy's quality map on ``/grasps/quality_map``, a 32FC1 image of
+q per pixel, NaN where unscored) are base64 strings tagged ``contentEncoding: base64``, which is
+how Foxglove reads bytes in JSON. Our own records (joint states, grasp table, suction state, episode result) are
 ``suctionbench.*`` JSON schemas in the same style (one type per field, ``properties`` on every
 object, ``required`` for what is always there).
 
@@ -41,7 +42,7 @@ booleans and tables as JSON text; a record ``suctionbench.types`` says which is 
 reader restores the types (logs written before it, all JSON text, still read).
 """
 
-from suctionbench.runlog.reader import depth_image, grasp_table, iter_messages, read_episode, read_run
+from suctionbench.runlog.reader import depth_image, float_image, grasp_table, iter_messages, read_episode, read_run
 from suctionbench.runlog.writer import EpisodeLog
 
-__all__ = ["EpisodeLog", "depth_image", "grasp_table", "iter_messages", "read_episode", "read_run"]
+__all__ = ["EpisodeLog", "depth_image", "float_image", "grasp_table", "iter_messages", "read_episode", "read_run"]

@@ -153,15 +153,21 @@ def iter_messages(path: str | os.PathLike, topic: str) -> Iterator[tuple[float, 
     return messages()
 
 
-def depth_image(message: dict[str, Any]) -> np.ndarray:
-    """The float32 (height, width) depth image in metres of a /camera/depth (RawImage) message."""
+def float_image(message: dict[str, Any], what: str = "image") -> np.ndarray:
+    """The float32 (height, width) image of a 32FC1 RawImage message: /camera/depth (metres) or
+    /grasps/quality_map (q, NaN where unscored); `what` names it in errors."""
     if message.get("encoding") != "32FC1":
-        raise InputError(f"depth message has encoding {message.get('encoding')!r}, expected '32FC1'")
+        raise InputError(f"{what} message has encoding {message.get('encoding')!r}, expected '32FC1'")
     height, width, step = message["height"], message["width"], message["step"]
     raw = np.frombuffer(base64.b64decode(message["data"]), dtype="<f4")
     if step != 4 * width or raw.size != height * width:
-        raise InputError(f"depth message: {raw.size * 4} bytes do not match {height}x{width} 32FC1 (step {step})")
+        raise InputError(f"{what} message: {raw.size * 4} bytes do not match {height}x{width} 32FC1 (step {step})")
     return raw.reshape(height, width).astype(np.float32)
+
+
+def depth_image(message: dict[str, Any]) -> np.ndarray:
+    """The float32 (height, width) depth image in metres of a /camera/depth (RawImage) message."""
+    return float_image(message, "depth")
 
 
 def grasp_table(message: dict[str, Any]) -> dict[str, Any]:

@@ -44,6 +44,7 @@ TOPIC_JOINTS = "/joint_states"
 TOPIC_GRASP_SCENE = "/grasps/candidates"
 TOPIC_GRASP_TABLE = "/grasps/table"
 TOPIC_GRASP_CHOSEN = "/grasps/chosen"
+TOPIC_QUALITY_MAP = "/grasps/quality_map"
 TOPIC_SUCTION = "/suction"
 TOPIC_RESULT = "/result"
 
@@ -142,6 +143,7 @@ TOPIC_SCHEMAS: dict[str, str] = {
     TOPIC_GRASP_SCENE: "foxglove.SceneUpdate",
     TOPIC_GRASP_TABLE: "suctionbench.GraspTable",
     TOPIC_GRASP_CHOSEN: "suctionbench.ChosenGrasp",
+    TOPIC_QUALITY_MAP: "foxglove.RawImage",
     TOPIC_SUCTION: "suctionbench.Suction",
     TOPIC_RESULT: "suctionbench.EpisodeResult",
 }
@@ -195,6 +197,14 @@ def seconds_to_ns(t: float) -> int:
 
 def _timestamp(ns: int) -> dict[str, int]:
     return {"sec": ns // 1_000_000_000, "nsec": ns % 1_000_000_000}
+
+
+def _float_image(stamp: dict[str, int], frame_id: str, image: np.ndarray) -> dict[str, Any]:
+    """A foxglove.RawImage message of a float32 (H, W) image: 32FC1, little-endian, base64."""
+    image = np.ascontiguousarray(image, dtype="<f4")
+    height, width = image.shape
+    return {"timestamp": stamp, "frame_id": frame_id, "width": width, "height": height, "encoding": "32FC1",
+            "step": width * 4, "data": base64.b64encode(image.tobytes()).decode("ascii")}
 
 
 def _xyz(v: np.ndarray) -> dict[str, float]:
@@ -385,19 +395,7 @@ class EpisodeLog:
             raise ValueError(f"depth image has shape {depth.shape}, expected (height, width) = ({height}, {width})")
         k = _as_array("intrinsics_matrix", intrinsics_matrix, (3, 3))
         stamp = _timestamp(ns)
-        self._write(
-            TOPIC_DEPTH,
-            ns,
-            {
-                "timestamp": stamp,
-                "frame_id": frame_id,
-                "width": width,
-                "height": height,
-                "encoding": "32FC1",
-                "step": width * 4,
-                "data": base64.b64encode(depth.tobytes()).decode("ascii"),
-            },
-        )
+        self._write(TOPIC_DEPTH, ns, _float_image(stamp, frame_id, depth))
         self._write(
             TOPIC_CALIBRATION,
             ns,
@@ -414,6 +412,16 @@ class EpisodeLog:
             },
         )
         self._write(TOPIC_TF, ns, {"transforms": [self._frame_transform(ns, frame_id, camera_pose_world)]})
+
+    def log_quality_map(self, t: float, quality: np.ndarray, frame_id: str = "camera") -> None:
+        """A dense policy's quality map: q of the grasp at each pixel of the depth image it planned
+        on (float32 (H, W), NaN where no grasp was scored), as a 32FC1 image in the camera's frame,
+        so Foxglove shows it beside /camera/depth and `reader.float_image` reads it back."""
+        quality = np.asarray(quality, dtype="<f4")
+        if quality.ndim != 2:
+            raise ValueError(f"quality map has shape {quality.shape}, expected (height, width)")
+        ns = seconds_to_ns(t)
+        self._write(TOPIC_QUALITY_MAP, ns, _float_image(_timestamp(ns), frame_id, quality))
 
     def log_transforms(self, t: float, transforms: Mapping[str, Any]) -> None:
         """Poses of named frames, each a 4x4 world-from-child matrix, as one /tf message."""

@@ -279,7 +279,7 @@ class PickRunner:
                                action.point_world[None], action.approach_world[None], None, 0)
         return RankedGrasp(
             action.point_world, action.approach_world, float(action.q), cands["points"] @ rot.T + origin,
-            cands["approaches"] @ rot.T, cands.get("q"), int(action.info["chosen"]),
+            cands["approaches"] @ rot.T, cands.get("q"), int(action.info["chosen"]), action.info.get("quality_map"),
         )
 
     def _log_start(self, log: Any, point: np.ndarray, approach: np.ndarray, chosen: Any) -> None:
@@ -297,6 +297,8 @@ class PickRunner:
         if chosen is not None:
             log.log_grasps(t, chosen.candidate_points, chosen.candidate_approaches, chosen.candidate_scores,
                            chosen.chosen_index)
+            if chosen.quality_map is not None:
+                log.log_quality_map(t, chosen.quality_map)
         else:
             log.log_grasps(t, point[None], approach[None], None, 0)
         model, tip, body = self.scene.model, self.episode.tip, self.episode.object

@@ -17,7 +17,7 @@ run() {  # name, eval options...; a finished run (its .done marker) is kept
   touch "$RUNS/$name.done"
 }
 for set in basic typical adversarial; do
-  for policy in gqcnn planarity-centroid centroid planarity random analytic; do
+  for policy in gqcnn fc-gqcnn planarity-centroid centroid planarity random analytic; do
     run "${policy}_${set}" --policy "$policy" --task "$set"
   done
 done

@@ -14,7 +14,8 @@ from suctionbench.evaluation.tasks import load_task
 from suctionbench.runlog.reader import read_run
 from suctionbench.sim.episode import FAILURES
 
-POLICIES = ["random", "centroid", "planarity", "planarity-centroid", "gqcnn", "analytic", "random-surface"]
+POLICIES = ["random", "centroid", "planarity", "planarity-centroid", "gqcnn", "fc-gqcnn", "analytic", "random-surface"]
+"""Every built-in policy: CI's one real pick each (`test_smoke_list_covers_every_policy` keeps it complete)."""
 
 
 def last_json(result):
@@ -45,6 +46,13 @@ def test_trials_are_identical_across_policies():
     b = plan_trials(task, "centroid", model=None, trials=30, seed=None)
     assert [(t.object_key, t.seed) for t in a] == [(t.object_key, t.seed) for t in b]
     assert len({t.object_key for t in a}) == 25  # every object of the set appears
+
+
+def test_smoke_list_covers_every_policy():
+    from suctionbench.policies.base import POLICIES as IMAGE_POLICIES
+    from suctionbench.sim.pick import KNOWN_STATE_POLICIES
+
+    assert set(POLICIES) == set(IMAGE_POLICIES) | set(KNOWN_STATE_POLICIES)
 
 
 @pytest.mark.parametrize("policy", POLICIES)

@@ -151,10 +151,3 @@ def test_dense_policy_refuses_a_model_it_cannot_convert():
 
     with pytest.raises(InputError, match="no network to convert"):
         make_policy("fc-gqcnn", model=Scores()).plan(observation, np.random.default_rng(0))
-
-
-def test_pick_with_the_dense_policy_is_a_valid_episode():
-    from suctionbench.sim.pick import PickRequest, PickRunner
-
-    result = PickRunner(PickRequest("basic/box_tea", policy="fc-gqcnn", seed=1)).run()
-    assert result["valid"] and result["policy_q"] is not None and 0 <= result["policy_q"] <= 1

@@ -307,6 +307,20 @@ def test_subset_is_seeded(dataset):
                                   np.concatenate([x.images for x in b.batches(64)]))
 
 
+def test_split_subset_draws_from_the_split_itself(dataset):
+    # The fit check's subset: datapoints of the (possibly already subsampled) training split only,
+    # the requested count of them, each once, seeded.
+    train_split = SplitData(dataset, "object_wise", "train", max_datapoints=60, subset_rng=np.random.default_rng(2))
+    part = train_split.subset(25, np.random.default_rng(3))
+    rows = lambda data: {(k, int(i)) for k, v in data._local.items() for i in v}  # noqa: E731
+    assert part.num_datapoints == 25 and rows(part) <= rows(train_split) and len(rows(part)) == 25
+    again = train_split.subset(25, np.random.default_rng(3))
+    assert rows(again) == rows(part)
+    assert train_split.subset(1000, np.random.default_rng(0)).num_datapoints == 60  # at most the whole split
+    np.testing.assert_array_equal(np.concatenate([b.metric for b in part.batches(64)]),
+                                  np.concatenate([b.metric for b in again.batches(64)]))
+
+
 def scene_depth(height: int = 220, width: int = 260) -> np.ndarray:
     """A depth image with no symmetry: a tilted table with two bumps of different sizes."""
     v, u = np.mgrid[0:height, 0:width].astype(np.float64)
@@ -483,6 +497,7 @@ def test_resume_equals_uninterrupted_run(dataset, tmp_path):
 def test_context_net_trains_saves_reloads_and_predicts(dataset, tmp_path):
     metrics = train(dataset, tmp_path, TrainConfig(arch="context", epochs=3, seed=1))  # augmentation on
     assert metrics["arch"] == "context" and metrics["parameters"] == 70_898 and math.isfinite(metrics["val_ap"])
+    assert 0 <= metrics["fit_accuracy"] <= 1 and math.isfinite(metrics["fit_ap"])  # the un-augmented fit check
     card = json.loads((tmp_path / CARD_NAME).read_text())
     assert card["image_channels"] == 2 and card["inputs"]["images"].startswith("(N, 2, 32, 32)")
     assert len(card["normalisation"]["image_mean"]) == 2 and len(card["normalisation"]["image_std"]) == 2

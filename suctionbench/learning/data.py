@@ -80,6 +80,7 @@ noise is in them already, averaged as a real sensor's would be.
 from __future__ import annotations
 
 import contextlib
+import copy
 import math
 import queue
 import threading
@@ -420,6 +421,17 @@ class SplitData:
     def shards(self) -> list[int]:
         """Shards holding at least one datapoint of the split, ascending."""
         return sorted(self._local)
+
+    def subset(self, count: int, rng: np.random.Generator) -> SplitData:
+        """A random subset of at most `count` of this split's datapoints (drawn with `rng`), sharing
+        its reader: e.g. the training datapoints scored after each epoch (`train`'s fit check)."""
+        pairs = np.concatenate([np.column_stack([np.full(len(v), k), v]) for k, v in sorted(self._local.items())])
+        if len(pairs) > count:
+            pairs = pairs[np.sort(rng.choice(len(pairs), size=count, replace=False))]
+        part = copy.copy(self)
+        part._local = {int(k): pairs[pairs[:, 0] == k, 1] for k in np.unique(pairs[:, 0])}
+        part.num_datapoints = len(pairs)
+        return part
 
     def load_shard(self, shard: int) -> Batch:
         """The split's datapoints of one shard, in index order; images (n, C, 32, 32)."""

@@ -148,6 +148,12 @@ class TrainConfig:
     shuffle_shards: int = 4
     """Shards pooled and shuffled together (memory ~ this x one shard, 4 MB per 1000 thumbnails)."""
 
+    fit_datapoints: int = 20_000
+    """Training datapoints (a fixed random subset of the training split) scored without
+    augmentation after every epoch: the fit accuracy and AP, comparable with the validation
+    figures (the running train_accuracy is over augmented images while the weights move); a fit
+    accuracy clearly above the validation accuracy says the network is not capacity-limited."""
+
     label_threshold: float | None = None
     """Label = metric > this; None: the dataset card's ``config.label_threshold`` (else 0.2)."""
 
@@ -174,6 +180,7 @@ class TrainConfig:
             "max_train_datapoints": (self.max_train_datapoints is None or integer(self.max_train_datapoints, 1),
                                      "None or an integer >= 1"),
             "shuffle_shards": (integer(self.shuffle_shards, 1), "an integer >= 1"),
+            "fit_datapoints": (integer(self.fit_datapoints, 1), "an integer >= 1"),
             "label_threshold": (self.label_threshold is None or number(self.label_threshold), "None or a number"),
         }
         for key, (ok, need) in checks.items():
@@ -443,13 +450,14 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
     reader = DatasetReader(dataset_dir)
     card = read_card(dataset_dir)
     threshold = config.label_threshold if config.label_threshold is not None else label_threshold(card)
-    seq_subset, seq_shuffle, seq_init, seq_augment = np.random.SeedSequence(config.seed).spawn(4)
+    seq_subset, seq_shuffle, seq_init, seq_augment, seq_fit = np.random.SeedSequence(config.seed).spawn(5)
     channels = image_channels_of(config.arch)  # which image fields the network reads
     train_data = SplitData(dataset_dir, config.split, "train", max_datapoints=config.max_train_datapoints,
                            subset_rng=np.random.default_rng(seq_subset), reader=reader, image_channels=channels)
     val_data = SplitData(dataset_dir, config.split, "val", reader=reader, image_channels=channels)
     if train_data.num_datapoints == 0:
         raise InputError(f"dataset '{dataset_dir}': split {config.split} has no training datapoints")
+    fit_data = train_data.subset(config.fit_datapoints, np.random.default_rng(seq_fit))
     resume_key = _resume_key(config, card, reader, train_data, val_data)
 
     if out_dir.exists() and not out_dir.is_dir():
@@ -518,9 +526,11 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
         session.train_seconds += result["seconds"]
         session.images_trained += result["images"]
         evaluation = evaluate(network, val_data, stats, threshold, device)
+        fit = evaluate(network, fit_data, stats, threshold, device)
         session.epoch = epoch
         session.history.append(json_safe({
             "epoch": epoch, "lr": lr, "train_loss": result["loss"], "train_accuracy": result["accuracy"],
+            "fit_accuracy": fit["accuracy"], "fit_ap": fit["ap"],
             "val_loss": evaluation["loss"], "val_accuracy": evaluation["accuracy"], "val_ap": evaluation["ap"],
             "train_seconds": result["seconds"], "train_images_per_s": result["images"] / max(result["seconds"], 1e-9),
         }))
@@ -538,6 +548,7 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
         "resumed_from_epoch": resumed_from, "epochs_trained_now": session.epoch - resumed_from,
         "num_train": train_data.num_datapoints, "num_val": val_data.num_datapoints, "label_threshold": threshold,
         "train_loss": last["train_loss"], "train_accuracy": last["train_accuracy"],
+        "fit_accuracy": last.get("fit_accuracy"), "fit_ap": last.get("fit_ap"),
         "val_loss": last["val_loss"], "val_accuracy": last["val_accuracy"], "val_ap": last["val_ap"],
         "train_seconds": round(session.train_seconds, 3),
         "train_images_per_s": round(run_images / run_seconds, 1) if run_seconds > 0 else

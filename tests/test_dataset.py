@@ -87,8 +87,17 @@ def test_resume_after_a_kill_equals_an_uninterrupted_run(reference, tmp_path, mo
     assert not (out / "tensors").exists() or not any((out / "tensors").glob("*.json"))
     with pytest.raises(InputError, match="--resume"):
         run(out)  # refuses to touch an existing output without --resume
-    run(out, resume=True)
+    card = run(out, resume=True)
     assert same_tensors(reference, out)
+    # generation time and size: both runs recorded, the killed one with the unit it finished
+    first, second = card["generation_runs"]
+    units = len(gen.plan_units(len(KEYS), CONFIG.datapoints))
+    assert first["units"] == 1 and second["units_before"] == 1 and second["units"] == units - 1
+    summary = card["generation"]
+    assert summary["untimed_units"] == 0 and summary["recorded_datapoints"] == CONFIG.datapoints
+    assert summary["bytes"] == sum(f.stat().st_size for f in out.rglob("*")
+                                   if f.is_file() and "units" not in f.parts and f.name != "config.json")
+    assert summary["bytes_per_datapoint"] > 32 * 32 * 4  # at least the float32 grasp thumbnail
 
 
 def test_corrupt_unit_is_reported_and_regenerated(reference, tmp_path):

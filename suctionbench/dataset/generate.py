@@ -18,6 +18,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from suctionbench.config import STANDARD_GRAVITY, LabelConfig, to_dict
-from suctionbench.dataset.storage import FIELDS
+from suctionbench.dataset.storage import CARD_NAME, FIELDS
 from suctionbench.errors import InputError
 from suctionbench.io import atomic_path
 from suctionbench.sensing.noise import DepthNoiseConfig
@@ -284,9 +285,10 @@ def generate_dataset(
     except OSError as exc:
         raise InputError(f"output '{out}': cannot create it ({exc.strerror})") from None
     shard_problems = DatasetReader(out).verify() if (out / "tensors").is_dir() else []
+    runs = _earlier_runs(out) if resume else []
     card: dict[str, Any] = {
         "fingerprint": fingerprint, "suctionbench_version": __version__, "config": to_dict(config),
-        "camera": camera_dict, "objects": object_keys, "status": "generating",
+        "camera": camera_dict, "objects": object_keys, "status": "generating", "generation_runs": runs,
     }
     write_card(out, card, datapoints_per_shard=config.datapoints_per_shard)
 
@@ -302,17 +304,55 @@ def generate_dataset(
             todo.append(unit)
         elif progress:
             progress(unit.quota)
+    this_run = {"engine": engine, "workers": workers, "units": 0, "datapoints": 0, "seconds": 0.0,
+                "units_before": len(units) - len(todo)}
+    runs.append(this_run)
+    start = time.perf_counter()
     for unit, arrays in run_units(todo, object_dirs, camera, config, engine=engine, workers=workers, address=address):
         save_unit(out, unit.index, arrays)
+        this_run["units"] += 1
+        this_run["datapoints"] += len(arrays["image_labels"])
+        this_run["seconds"] = round(time.perf_counter() - start, 1)
+        write_card(out, card, datapoints_per_shard=config.datapoints_per_shard)  # an interrupted run keeps its record
         if progress:
             progress(unit.quota)
 
     writer = DatasetWriter(out, datapoints_per_shard=config.datapoints_per_shard)
+    assemble = time.perf_counter()
     stats = _assemble_shards(out, units, writer, config.datapoints_per_shard, config.label_threshold)
     write_splits(out, stats.pop("image_ids"), stats.pop("object_ids"), val_fraction=0.2, seed=config.seed)
-    card.update(stats, status="complete", regenerated_corrupt_units=corrupt, rewritten_shard_problems=shard_problems)
+    this_run["assembly_seconds"] = round(time.perf_counter() - assemble, 1)
+    card.update(stats, status="complete", regenerated_corrupt_units=corrupt, rewritten_shard_problems=shard_problems,
+                generation=_generation_summary(runs, len(units), DatasetReader(out)))
     write_card(out, card, datapoints_per_shard=config.datapoints_per_shard)
     return card
+
+
+def _earlier_runs(out: Path) -> list[dict[str, Any]]:
+    """The record of the runs that generated what `out` already holds (the card's
+    ``generation_runs``; empty for a dataset begun before suctionbench kept it)."""
+    from suctionbench.dataset.storage import read_card
+
+    try:
+        runs = read_card(out).get("generation_runs")
+    except InputError:
+        return []
+    return [dict(r) for r in runs if isinstance(r, dict)] if isinstance(runs, list) else []
+
+
+def _generation_summary(runs: list[dict[str, Any]], units: int, reader: Any) -> dict[str, Any]:
+    """Generation time and size for the card: the recorded runs' wall-clock seconds, datapoints and
+    rate, how many units were made before any record (resumed from an older run), and the bytes on
+    disk of the shards and splits (not the per-unit files resuming needs)."""
+    seconds = sum(float(r.get("seconds", 0.0)) for r in runs)
+    made = sum(int(r.get("datapoints", 0)) for r in runs)
+    timed_units = sum(int(r.get("units", 0)) for r in runs)
+    size = sum(p.stat().st_size for p in Path(reader.directory).rglob("*")
+               if p.is_file() and "units" not in p.parts and p.name != CARD_NAME)  # shards and splits
+    return {"recorded_seconds": round(seconds, 1), "recorded_datapoints": made,
+            "datapoints_per_s": round(made / seconds, 1) if seconds > 0 else None,
+            "untimed_units": units - timed_units, "bytes": size,
+            "bytes_per_datapoint": round(size / max(reader.num_datapoints, 1), 1)}
 
 
 def _assemble_shards(out: Path, units: list[Unit], writer: Any, per_shard: int, threshold: float) -> dict[str, Any]:

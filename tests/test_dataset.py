@@ -192,3 +192,19 @@ def test_smoothed_approaches_blend_faces_at_edges_like_a_depth_normal():
     plate = trimesh.creation.box((0.1, 0.1, 0.002))
     flat = smoothed_approaches(plate, np.array([[0.0, 0.0, 0.001]]), down[:1], 0.003, np.random.default_rng(0))
     np.testing.assert_allclose(flat, down[:1])
+
+
+def test_dataset_show_reports_generation_time_and_size(reference):
+    import json
+
+    from typer.testing import CliRunner
+
+    from suctionbench.cli import app
+
+    result = CliRunner().invoke(app, ["dataset", "show", str(reference), "--json"])
+    assert result.exit_code == 0, result.output
+    shown = json.loads(result.stdout.strip().splitlines()[-1])
+    generation = read_card(reference)["generation"]
+    assert shown["generation_bytes"] == generation["bytes"] > 0
+    assert shown["generation_recorded_seconds"] == generation["recorded_seconds"] > 0
+    assert shown["generation_untimed_units"] == 0

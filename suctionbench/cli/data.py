@@ -97,6 +97,9 @@ def dataset_show(
             "objects": len(card.get("objects", [])), "status": card.get("status"),
             "threshold": label_threshold(card),
         }
+        generation = card.get("generation") or {}  # time and size (datasets generated since it was recorded)
+        summary.update({f"generation_{key}": generation.get(key) for key in
+                        ("recorded_seconds", "datapoints_per_s", "untimed_units", "bytes")})
         if thumbnails is not None:
             from suctionbench.sensing.image import save_png
             from suctionbench.sensing.thumbnails import to_uint8_grid

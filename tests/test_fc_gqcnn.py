@@ -43,28 +43,36 @@ def _window_centre(points: np.ndarray, a0: int, b0: int, angle: float, pitch: fl
                                             + np.array([math.sin(angle), -math.cos(angle)]))
 
 
-def test_dense_q_is_the_network_on_each_pixels_window():
-    # refine 0: the dense map itself. At every valid pixel its q is the thumbnail network's q on
-    # the thumbnail centred on the pixel's lattice window, at its bin's angle, with the pixel's own
-    # pose: normalisation, pose rows, window indices and bins all checked together.
-    model = load_model(MODEL_DIR)
+def _dense_windows(model, configs, count: int, seed: int):
+    """fc-gqcnn's dense map (refine 0) on box_tea; `count` random pixels of it, their bins' angles
+    and, per thumbnail config, the image centre of each pixel's lattice window (read independently
+    through `_window_centre`)."""
     policy = make_policy("fc-gqcnn", model=model, refine=0)
     scene = Scene("basic/box_tea")
     observation = scene.observation(mask=scene.mask)
     cloud = scene_cloud(observation, policy.config.sampler)
     dense = policy.quality(observation, cloud)
-    _, depths, angles = project_grasps(dense["points"], dense["approaches"], cloud.intrinsics)
+    _, _, angles = project_grasps(dense["points"], dense["approaches"], cloud.intrinsics)
     step = 2 * math.pi / policy.config.rotations
     bins = np.mod(np.rint(angles / step).astype(int), policy.config.rotations)
-    pick = np.random.default_rng(0).choice(len(bins), size=60, replace=False)
-    centres, bin_angles = [], []
+    pick = np.random.default_rng(seed).choice(len(bins), size=count, replace=False)
+    centres = [[] for _ in configs]
     for i in pick:
         mine = np.flatnonzero(bins == bins[i])
-        points, windows = lattice_positions(dense["pixels"][mine], bins[i] * step)
-        a0, b0 = windows[np.searchsorted(mine, i)]
-        centres.append(_window_centre(points, a0, b0, bins[i] * step))
-        bin_angles.append(bins[i] * step)
-    thumbnails = extract_thumbnails(observation.depth, np.array(centres), np.array(bin_angles))
+        for config, found in zip(configs, centres, strict=True):
+            points, windows = lattice_positions(dense["pixels"][mine], bins[i] * step, config)
+            a0, b0 = windows[np.searchsorted(mine, i)]
+            found.append(_window_centre(points, a0, b0, bins[i] * step, pitch=1 / config.scale))
+    return policy, observation, dense, pick, bins[pick] * step, [np.array(c) for c in centres]
+
+
+def test_dense_q_is_the_network_on_each_pixels_window():
+    # refine 0: the dense map itself. At every valid pixel its q is the thumbnail network's q on
+    # the thumbnail centred on the pixel's lattice window, at its bin's angle, with the pixel's own
+    # pose: normalisation, pose rows, window indices and bins all checked together.
+    model = load_model(MODEL_DIR)
+    policy, observation, dense, pick, turn, [centres] = _dense_windows(model, [THUMBNAIL_GQCNN], 60, 0)
+    thumbnails = extract_thumbnails(observation.depth, centres, turn)
     want = model.predict(thumbnails, dense["poses"][pick])
     np.testing.assert_allclose(dense["q"][pick], want, rtol=0, atol=1e-5)
     action = policy.plan(observation, np.random.default_rng(0))
@@ -82,27 +90,12 @@ def test_dense_q_of_a_context_net_reads_both_lattices():
 
     stats = NormStats((0.57, 0.59), (0.02, 0.01), (0.57, 0.2), (0.02, 0.1), count=1)
     model = GQCNNModel(build_model("context", torch.Generator().manual_seed(2)), stats, {"arch": "context"})
-    policy = make_policy("fc-gqcnn", model=model, refine=0)
-    scene = Scene("basic/box_tea")
-    observation = scene.observation(mask=scene.mask)
-    cloud = scene_cloud(observation, policy.config.sampler)
-    dense = policy.quality(observation, cloud)
-    _, _, angles = project_grasps(dense["points"], dense["approaches"], cloud.intrinsics)
-    step = 2 * math.pi / policy.config.rotations
-    bins = np.mod(np.rint(angles / step).astype(int), policy.config.rotations)
-    pick = np.random.default_rng(1).choice(len(bins), size=40, replace=False)
-    grasp_centres, context_centres = [], []
-    for i in pick:
-        mine = np.flatnonzero(bins == bins[i])
-        for config, centres in ((THUMBNAIL_GQCNN, grasp_centres), (THUMBNAIL_CONTEXT, context_centres)):
-            points, windows = lattice_positions(dense["pixels"][mine], bins[i] * step, config)
-            a0, b0 = windows[np.searchsorted(mine, i)]
-            centres.append(_window_centre(points, a0, b0, bins[i] * step, pitch=1 / config.scale))
-    off = np.linalg.norm(np.array(context_centres) - dense["pixels"][pick], axis=1)
+    _, observation, dense, pick, turn, (grasp, context) = _dense_windows(
+        model, [THUMBNAIL_GQCNN, THUMBNAIL_CONTEXT], 40, 1)
+    off = np.linalg.norm(context - dense["pixels"][pick], axis=1)
     assert off.max() <= 9 * math.sqrt(2) / 2 + 1e-9  # half the context lattice's diagonal
-    turn = bins[pick] * step
-    pairs = np.stack([extract_thumbnails(observation.depth, np.array(grasp_centres), turn),
-                      extract_context_thumbnails(observation.depth, np.array(context_centres), turn)], axis=1)
+    pairs = np.stack([extract_thumbnails(observation.depth, grasp, turn),
+                      extract_context_thumbnails(observation.depth, context, turn)], axis=1)
     want = model.predict(pairs, dense["poses"][pick])
     assert want.std() > 1e-3  # the check can tell positions apart
     np.testing.assert_allclose(dense["q"][pick], want, rtol=0, atol=1e-5)

@@ -352,9 +352,9 @@ def _versions() -> dict[str, str]:
 
 def _check_model(model: str | None) -> None:
     from suctionbench.learning.checkpoint import load_model
-    from suctionbench.resources import asset_path
+    from suctionbench.policies.gqcnn import default_model_dir
 
-    load_model(model or asset_path("models", "gqcnn-compact"))
+    load_model(model or default_model_dir())
 
 
 def run_records(run_dir: Path) -> list[dict[str, Any]]:

@@ -254,7 +254,7 @@ def fit_gmm(
 
 
 def default_model_dir() -> Path:
-    """Directory of the shipped default GQ-CNN (assets/models/gqcnn-compact)."""
+    """Directory of the shipped default GQ-CNN (assets/models/..., `DEFAULT_MODEL`)."""
     return asset_path(*DEFAULT_MODEL)
 
 
@@ -389,7 +389,7 @@ def make_gqcnn_policy(
     model: GraspQualityModel | str | Path | None = None, config: CEMConfig | None = None, **overrides: Any
 ) -> GQCNNPolicy:
     """Registry factory for "gqcnn": `model` is a model object (anything with `predict`), a model
-    directory (loaded on first use), or None for the shipped default (assets/models/gqcnn-compact).
+    directory (loaded on first use), or None for the shipped default (`default_model_dir`).
     A missing directory raises InputError."""
     return GQCNNPolicy(resolve_model(model), config, **overrides)
 

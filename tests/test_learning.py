@@ -634,12 +634,14 @@ def test_cli_train_and_show(dataset, tmp_path):
     runner = CliRunner()
     out = tmp_path / "model"
     result = runner.invoke(app, ["train", "--dataset", str(dataset), "--out", str(out), "--arch", "compact",
-                                 "--epochs", "1", "--seed", "3", "--no-augment", "--json"])
+                                 "--epochs", "1", "--seed", "3", "--no-augment", "--max-val-datapoints", "30",
+                                 "--json"])
     assert result.exit_code == 0, result.output
     trained = json.loads(result.stdout.strip().splitlines()[-1])
     assert trained["ok"] and trained["epochs"] == 1 and trained["arch"] == "compact"
+    assert trained["num_val"] == 30  # the validation subset
     card = json.loads((out / CARD_NAME).read_text())
-    assert "train" in card["command"] and "--seed 3" in card["command"]
+    assert "train" in card["command"] and "--seed 3" in card["command"] and "--max-val-datapoints 30" in card["command"]
 
     result = runner.invoke(app, ["model", "show", str(out), "--json"])
     assert result.exit_code == 0, result.output

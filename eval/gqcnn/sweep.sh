@@ -11,6 +11,7 @@ DATASET=${1:?dataset directory}
 OUT=${2:-runs/gqcnn_sweep}
 MAX_TRAIN=${3:-400000}
 EPOCHS=${4:-5}
+MAX_VAL=${MAX_VAL:-50000}  # validation subset scored after every epoch (held-out objects)
 shift $(( $# < 4 ? $# : 4 ))
 ARCHS=${*:-compact context context-wide}
 SB=${SB:-suctionbench}
@@ -18,7 +19,7 @@ mkdir -p "$OUT"
 for arch in $ARCHS; do
   if [ ! -f "$OUT/$arch.json" ]; then
     $SB train --dataset "$DATASET" --out "$OUT/$arch" --arch "$arch" --epochs "$EPOCHS" --split object_wise \
-      --max-datapoints "$MAX_TRAIN" --seed 0 --json | tail -n 1 > "$OUT/$arch.json.tmp"
+      --max-datapoints "$MAX_TRAIN" --max-val-datapoints "$MAX_VAL" --seed 0 --json | tail -n 1 > "$OUT/$arch.json.tmp"
     mv "$OUT/$arch.json.tmp" "$OUT/$arch.json"
   fi
   if [ ! -f "$OUT/${arch}_plan.json" ]; then

@@ -52,6 +52,8 @@ def train_cmd(
     split: Annotated[str, typer.Option(help="Split: image_wise or object_wise.")] = "image_wise",
     batch_size: Annotated[int, typer.Option(help="Training batch size (gqcnn: 64).")] = 64,
     max_datapoints: Annotated[int | None, typer.Option(help="Train on a random subset of this many.")] = None,
+    max_val_datapoints: Annotated[int | None, typer.Option(
+        help="Validate on a random subset of this many (after every epoch).")] = None,
     augment: Annotated[bool, typer.Option(help="Noise and symmetrisation augmentation (gqcnn's).")] = True,
     overwrite: Annotated[bool, typer.Option(help="Discard a run already in --out instead of resuming it.")] = False,
     seed: SeedOpt = 0,
@@ -69,13 +71,14 @@ def train_cmd(
         check_dataset(dataset)  # never train on a damaged dataset or NaN labels
 
         config = TrainConfig(arch=arch, epochs=epochs, device=device, split=split, batch_size=batch_size,
-                             max_train_datapoints=max_datapoints, augment=AUGMENT_GQCNN if augment else AUGMENT_OFF,
-                             seed=seed)
+                             max_train_datapoints=max_datapoints, max_val_datapoints=max_val_datapoints,
+                             augment=AUGMENT_GQCNN if augment else AUGMENT_OFF, seed=seed)
         # Every option spelled out, defaults included: the card's command reproduces the run even if defaults change.
         command = shlex.join([
             "suctionbench", "train", "--dataset", str(dataset), "--out", str(out), "--arch", arch, "--epochs",
             str(epochs), "--device", device, "--split", split, "--batch-size", str(batch_size),
             *(["--max-datapoints", str(max_datapoints)] if max_datapoints else []),
+            *(["--max-val-datapoints", str(max_val_datapoints)] if max_val_datapoints else []),
             "--augment" if augment else "--no-augment", "--seed", str(seed),
         ])
         with _train_progress(not as_json) as update:

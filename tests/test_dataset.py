@@ -208,3 +208,26 @@ def test_dataset_show_reports_generation_time_and_size(reference):
     assert shown["generation_bytes"] == generation["bytes"] > 0
     assert shown["generation_recorded_seconds"] == generation["recorded_seconds"] > 0
     assert shown["generation_untimed_units"] == 0
+
+
+def test_a_passed_check_is_trusted_until_a_file_changes(reference, tmp_path, monkeypatch):
+    import shutil
+
+    from suctionbench.dataset import verify
+
+    data = tmp_path / "copy"
+    shutil.copytree(reference, data)
+    (data / verify.VERIFIED_NAME).unlink(missing_ok=True)
+    verify.check_dataset(data)  # a full read; the pass is recorded
+    assert (data / verify.VERIFIED_NAME).is_file() and verify.foreign_entries(data) == []
+    calls = []
+    monkeypatch.setattr(verify, "verify_dataset", lambda d: calls.append(d) or [])
+    verify.check_dataset(data)
+    assert calls == []  # nothing changed: the record stands in for the read
+    monkeypatch.undo()
+    shard = sorted((data / "tensors").glob("robust_suction_wrench_resistance_*.npz"))[0]
+    blob = bytearray(shard.read_bytes())
+    blob[-30] ^= 0xFF  # a damaged shard: size kept, modification time moves
+    shard.write_bytes(bytes(blob))
+    with pytest.raises(InputError, match="sha256|hash|manifest"):
+        verify.check_dataset(data)

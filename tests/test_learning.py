@@ -309,11 +309,13 @@ def test_subset_is_seeded(dataset):
 
 def test_split_subset_draws_from_the_split_itself(dataset):
     # The fit check's subset: datapoints of the (possibly already subsampled) training split only,
-    # the requested count of them, each once, seeded.
+    # the requested count of them, each once, seeded, in whole shards but the last.
     train_split = SplitData(dataset, "object_wise", "train", max_datapoints=60, subset_rng=np.random.default_rng(2))
     part = train_split.subset(25, np.random.default_rng(3))
     rows = lambda data: {(k, int(i)) for k, v in data._local.items() for i in v}  # noqa: E731
     assert part.num_datapoints == 25 and rows(part) <= rows(train_split) and len(rows(part)) == 25
+    whole = [k for k in part._local if len(part._local[k]) == len(train_split._local[k])]
+    assert len(whole) >= len(part._local) - 1  # every shard it reads is used in full, bar one
     again = train_split.subset(25, np.random.default_rng(3))
     assert rows(again) == rows(part)
     assert train_split.subset(1000, np.random.default_rng(0)).num_datapoints == 60  # at most the whole split

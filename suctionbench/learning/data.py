@@ -423,14 +423,19 @@ class SplitData:
         return sorted(self._local)
 
     def subset(self, count: int, rng: np.random.Generator) -> SplitData:
-        """A random subset of at most `count` of this split's datapoints (drawn with `rng`), sharing
-        its reader: e.g. the training datapoints scored after each epoch (`train`'s fit check)."""
-        pairs = np.concatenate([np.column_stack([np.full(len(v), k), v]) for k, v in sorted(self._local.items())])
-        if len(pairs) > count:
-            pairs = pairs[np.sort(rng.choice(len(pairs), size=count, replace=False))]
+        """At most `count` of this split's datapoints, sharing its reader: its datapoints in whole
+        shards taken in a random order (drawn with `rng`), the last one cut to make up the count.
+        Whole shards, so scoring the subset reads few files (`train`'s fit check after every
+        epoch: 20,000 of a 2.8 M-datapoint dataset's random rows would touch every shard)."""
+        order = rng.permutation(self.shards)
+        local, total = {}, 0
+        for shard in order.tolist():
+            if total >= count:
+                break
+            rows = self._local[shard][: count - total]
+            local[shard], total = rows, total + len(rows)
         part = copy.copy(self)
-        part._local = {int(k): pairs[pairs[:, 0] == k, 1] for k in np.unique(pairs[:, 0])}
-        part.num_datapoints = len(pairs)
+        part._local, part.num_datapoints = dict(sorted(local.items())), total
         return part
 
     def load_shard(self, shard: int) -> Batch:

@@ -153,7 +153,7 @@ class TrainConfig:
     """Shards pooled and shuffled together (memory ~ this x one shard, 4 MB per 1000 thumbnails)."""
 
     fit_datapoints: int = 20_000
-    """Training datapoints (a fixed random subset of the training split) scored without
+    """Training datapoints (a fixed random subset of the training split, in whole shards) scored without
     augmentation after every epoch: the fit accuracy and AP, comparable with the validation
     figures (the running train_accuracy is over augmented images while the weights move); a fit
     accuracy clearly above the validation accuracy says the network is not capacity-limited."""

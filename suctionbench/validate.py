@@ -71,7 +71,8 @@ OPTION_RULES: dict[str, Rule] = {
     "cores": CORES,
     # counts
     "trials": COUNT, "datapoints": COUNT, "grasps": COUNT, "grasps_per_object": COUNT, "samples": COUNT,
-    "epochs": COUNT, "batch_size": Rule(1, 2**20), "max_datapoints": COUNT, "count": COUNT, "scenes": COUNT,
+    "epochs": COUNT, "batch_size": Rule(1, 2**20), "max_datapoints": COUNT, "max_val_datapoints": COUNT,
+    "count": COUNT, "scenes": COUNT,
     "episodes": COUNT, "memory_grasps": COUNT, "reference_grasps": Rule(0, COUNT_MAX),
     "top": Rule(0, COUNT_MAX, meaning="rows of the table; 0 = none"),
     # physical quantities and thresholds
@@ -85,7 +86,8 @@ OPTION_RULES: dict[str, Rule] = {
 must have one (tests/test_fuzz.py checks this); a float option is finite in any case."""
 
 SIZE_OPTIONS = frozenset({"trials", "datapoints", "grasps", "grasps_per_object", "samples", "epochs", "batch_size",
-                          "max_datapoints", "count", "scenes", "episodes", "memory_grasps", "reference_grasps"})
+                          "max_datapoints", "max_val_datapoints", "count", "scenes", "episodes", "memory_grasps",
+                          "reference_grasps"})
 """The options that set how much work, memory or disk a command takes: named when memory runs out."""
 
 

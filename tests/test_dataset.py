@@ -218,11 +218,13 @@ def test_a_passed_check_is_trusted_until_a_file_changes(reference, tmp_path, mon
     data = tmp_path / "copy"
     shutil.copytree(reference, data)
     (data / verify.VERIFIED_NAME).unlink(missing_ok=True)
-    verify.check_dataset(data)  # a full read; the pass is recorded
+    state = verify.check_dataset(data)  # a full read
+    assert not (data / verify.VERIFIED_NAME).exists()  # recorded only once the command succeeded
+    verify.record_check(data, state)
     assert (data / verify.VERIFIED_NAME).is_file() and verify.foreign_entries(data) == []
     calls = []
     monkeypatch.setattr(verify, "verify_dataset", lambda d: calls.append(d) or [])
-    verify.check_dataset(data)
+    assert verify.check_dataset(data) is None
     assert calls == []  # nothing changed: the record stands in for the read
     monkeypatch.undo()
     shard = sorted((data / "tensors").glob("robust_suction_wrench_resistance_*.npz"))[0]

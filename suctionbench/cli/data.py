@@ -85,10 +85,10 @@ def dataset_show(
 
     def body() -> dict[str, Any]:
         from suctionbench.dataset.storage import DatasetReader, read_card
-        from suctionbench.dataset.verify import check_dataset
+        from suctionbench.dataset.verify import check_dataset, record_check
         from suctionbench.learning.data import label_threshold
 
-        check_dataset(directory)  # manifests, hashes, shapes, finite labels, splits: else exit 2
+        checked = check_dataset(directory)  # manifests, hashes, shapes, finite labels, splits: else exit 2
         card = read_card(directory)
         reader = DatasetReader(directory)
         summary = {
@@ -111,6 +111,7 @@ def dataset_show(
             labels = shard["robust_suction_wrench_resistance"][pick] > summary["threshold"]
             save_png(thumbnails, to_uint8_grid(shard["depth_ims_tf_table"][pick, ..., 0], labels))
             summary["thumbnails"] = str(thumbnails)
+        record_check(directory, checked)
         if not as_json:
             print_rows(str(directory), [summary])
         return summary

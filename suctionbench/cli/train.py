@@ -64,11 +64,11 @@ def train_cmd(
     def body() -> dict[str, Any]:
         import shlex
 
-        from suctionbench.dataset.verify import check_dataset
+        from suctionbench.dataset.verify import check_dataset, record_check
         from suctionbench.learning.data import AUGMENT_GQCNN, AUGMENT_OFF
         from suctionbench.learning.train import TrainConfig, train
 
-        check_dataset(dataset)  # never train on a damaged dataset or NaN labels
+        checked = check_dataset(dataset)  # never train on a damaged dataset or NaN labels
 
         config = TrainConfig(arch=arch, epochs=epochs, device=device, split=split, batch_size=batch_size,
                              max_train_datapoints=max_datapoints, max_val_datapoints=max_val_datapoints,
@@ -83,6 +83,7 @@ def train_cmd(
         ])
         with _train_progress(not as_json) as update:
             metrics = train(dataset, out, config, progress=update, command=command, overwrite=overwrite)
+        record_check(dataset, checked)
         if not as_json:
             keys = ("arch", "epochs", "train_accuracy", "val_accuracy", "val_ap", "train_images_per_s", "out")
             print_rows("trained", [{k: metrics[k] for k in keys}])

@@ -183,18 +183,19 @@ def verify_dataset(directory: str | Path) -> list[str]:
     return problems
 
 
-def check_dataset(directory: str | Path) -> None:
+def check_dataset(directory: str | Path) -> dict[str, list[int]] | None:
     """InputError with the first problem (and how many there are) if `directory` fails `verify_dataset`.
 
-    A pass is recorded (`VERIFIED_NAME`); while no file of the card, shards and splits has changed
-    size or modification time (nor been added or removed) the record stands in for the full read.
+    A pass that `record_check` recorded (`VERIFIED_NAME`) stands in for the full read while no file
+    of the card, shards and splits has changed size or modification time (nor been added or
+    removed). Returns what `record_check` records after the command succeeds (the files' state when
+    they were read), or None when the record was trusted or the state could not be read.
     """
     directory = Path(directory)
     state = _file_state(directory)
-    record = directory / VERIFIED_NAME
     try:
-        if state is not None and json.loads(record.read_text()) == state:
-            return
+        if state is not None and json.loads((directory / VERIFIED_NAME).read_text()) == state:
+            return None
     except (OSError, ValueError):
         pass
     problems = verify_dataset(directory)
@@ -202,12 +203,21 @@ def check_dataset(directory: str | Path) -> None:
         more = f" (and {len(problems) - 1} more problems)" if len(problems) > 1 else ""
         first = problems[0] if str(directory) in problems[0] else f"dataset '{directory}': {problems[0]}"
         raise InputError(first + more)
-    if state is not None and state == _file_state(directory):  # unchanged while it was read
-        try:
-            with atomic_path(record) as tmp:
-                tmp.write_text(json.dumps(state))
-        except OSError:  # a read-only dataset is checked in full every time
-            pass
+    return state
+
+
+def record_check(directory: str | Path, state: dict[str, list[int]] | None) -> None:
+    """Record `check_dataset`'s pass in the dataset, once the command that checked it succeeded (a
+    refused command writes nothing): only if no file changed since it was read, and silently not
+    on a read-only dataset (which is then checked in full every time)."""
+    directory = Path(directory)
+    if state is None or state != _file_state(directory):
+        return
+    try:
+        with atomic_path(directory / VERIFIED_NAME) as tmp:
+            tmp.write_text(json.dumps(state))
+    except OSError:
+        pass
 
 
 def _file_state(directory: Path) -> dict[str, list[int]] | None:

@@ -13,7 +13,7 @@ from scipy.integrate import solve_ivp
 from suctionbench.config import CUP_DEFAULT, STANDARD_GRAVITY
 from suctionbench.contact.arrival import (
     Arrival,
-    min_jerk_speed,
+    min_jerk_at,
     quarter_swing_share,
     response_factor,
     table_support,
@@ -26,7 +26,7 @@ G = STANDARD_GRAVITY
 def test_min_jerk_speed_halfway_and_ends():
     # s(u) = 10 u^3 - 15 u^4 + 6 u^5 is 1/2 at u = 1/2 (odd about it), where s' = 30 u^2 (1 - u)^2
     # = 30 / 16 = 1.875: the peak speed, 1.875 x the mean H / T. At both ends s' = 0.
-    speed = min_jerk_speed(np.array([0.0, 0.075, 0.15, 0.3]), 0.15, 1.0)
+    speed, _ = min_jerk_at(np.array([0.0, 0.075, 0.15, 0.3]), 0.15, 1.0)
     assert speed[1] == pytest.approx(1.875 * 0.15, rel=1e-9)
     assert speed[0] == pytest.approx(0.0, abs=1e-12) and speed[2] == pytest.approx(0.0, abs=1e-9)
     assert speed[3] == pytest.approx(0.0, abs=1e-9)  # beyond the lift: clipped to its end
@@ -98,7 +98,7 @@ def test_lift_off_rate_and_turning_point_of_a_bar():
     phi_s = swing.static_tilt()
     lever = length / 2 + d
     risen = m * G / cup.axial_stiffness + lever * math.sin(phi_s[0])
-    expected_rate = float(min_jerk_speed(np.array([risen]), 0.15, 1.0)[0]) / (lever * math.cos(phi_s[0]))
+    expected_rate = float(min_jerk_at(np.array([risen]), 0.15, 1.0)[0][0]) / (lever * math.cos(phi_s[0]))
     rate, _ = arrival.lift_off(swing.n, phi_s, ring, com, frame)
     assert rate[0] == pytest.approx(expected_rate, rel=1e-9)
 

@@ -20,8 +20,7 @@ import numpy as np
 
 from suctionbench.config import LabelConfig
 from suctionbench.contact import wrench
-from suctionbench.contact.labeller import NOMINAL_TRANSPORT_AZIMUTHS, SuctionLabeller
-from suctionbench.contact.robust import arrivals, inertial_forces
+from suctionbench.contact.labeller import SuctionLabeller
 from suctionbench.objects.registry import load_object
 from suctionbench.sim.pick import PickRequest, PickRunner
 
@@ -64,14 +63,9 @@ def labelled(runner: PickRunner, pose: np.ndarray, result: dict) -> list[str]:
     grasp = np.asarray(result["grasp_world"], dtype=float)
     point, approach = grasp[None, :3], grasp[None, 3:]
     frames, seal = labeller.frames(point, approach), labeller.seal(point, approach)
-    cup, obj, motion = labeller.config.cup, labeller.object, labeller.config.perturbation
-    weight = obj.gravity_force[None]
-    inertial = inertial_forces(obj.mass, obj.gravity, motion.inertial_acceleration, frames,
-                               NOMINAL_TRANSPORT_AZIMUTHS[None], motion.lift_acceleration)
-    cases = arrivals(obj, motion, cup, weight, inertial)
+    cup = labeller.config.cup
     out = []
-    for case, arrival in enumerate(cases):
-        w = wrench.lip_load(weight + inertial[:, case], com[None], seal.ring_centre, frames, cup, arrival)
+    for w in labeller.nominal_lip_loads(frames, seal):
         limit = 0.5 * cup.radius * (seal.vacuum_force[0] - w[0, 2])
         out.append(f"{math.hypot(w[0, 3], w[0, 4]) / limit:.2f}")
     return out

@@ -65,10 +65,11 @@ RESIDUAL_PERIODS = 1.5
 it: the hold over the bin), where the peak may still come."""
 
 
-def min_jerk_speed(height: np.ndarray, total: float, duration: float) -> np.ndarray:
+def min_jerk_at(height: np.ndarray, total: float, duration: float) -> tuple[np.ndarray, np.ndarray]:
     """Tool speed (m/s) of a min-jerk move of `total` metres over `duration` s once it has covered
-    `height` (clipped to [0, total]; 0 at both ends)."""
-    return (total / duration) * minjerk.speed(minjerk.progress(np.asarray(height, dtype=float) / total))
+    `height` (clipped to [0, total]; 0 at both ends), and the time (s) into the move when it has."""
+    u = minjerk.progress(np.asarray(height, dtype=float) / total)
+    return (total / duration) * minjerk.speed(u), duration * u
 
 
 def quarter_swing_share(zeta: float) -> float:
@@ -191,8 +192,8 @@ class Arrival:
         ahead = (towards @ self.support.T).max(axis=1) - np.einsum("ni,ni->n", ring_centre, towards)
         lever = np.maximum(ahead, 1e-3)  # a grasp above its pivot: the object lifts off at once
         risen = weight / self.axial_stiffness + lever * np.sin(phi_s)
-        speed = min_jerk_speed(risen, self.lift_height, self.lift_time)
+        speed, time = min_jerk_at(risen, self.lift_height, self.lift_time)
         pivot_axis = np.einsum("nji,nj->ni", frames, np.cross(down, towards))
         along_n = np.abs(np.einsum("ni,ni->n", pivot_axis, n))
         rate = np.where(reach > 1e-9, speed / (lever * np.cos(phi_s)) * along_n, 0.0)
-        return rate, self.lift_time * minjerk.progress(risen / self.lift_height)
+        return rate, time

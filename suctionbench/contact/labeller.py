@@ -92,21 +92,28 @@ class SuctionLabeller:
         points, approaches = _check_grasps(points, approaches)
         frames = self.frames(points, approaches)
         seal = seal or self.seal_model.evaluate(points, frames)
-        weight = np.broadcast_to(self.object.gravity_force, points.shape)
-        loads = weight[:, None, :]
-        accel = self.config.perturbation.inertial_acceleration
-        if accel > 0.0:
-            azimuths = np.broadcast_to(NOMINAL_TRANSPORT_AZIMUTHS, (len(points), len(NOMINAL_TRANSPORT_AZIMUTHS)))
-            loads = weight[:, None, :] + inertial_forces(self.object.mass, self.object.gravity, accel, frames, azimuths,
-                                                         self.config.perturbation.lift_acceleration)
-        com = np.broadcast_to(self.object.com, points.shape)
-        cases = arrivals(self.object, self.config.perturbation, self.config.cup, weight, loads - weight[:, None, :])
         ok = seal.seal.copy()
-        for case in range(loads.shape[1]):
-            arrival = None if cases is None else cases[case]
-            wrench = lip_load(loads[:, case], com, seal.ring_centre, frames, self.config.cup, arrival)
+        for wrench in self.nominal_lip_loads(frames, seal):
             ok &= resists(wrench, self.config.cup.friction, self.config.cup, seal.vacuum_force, seal.lip_heights)
         return ok
+
+    def nominal_lip_loads(self, frames: np.ndarray, seal: SealResult) -> list[np.ndarray]:
+        """The wrench (N, 6) the lip carries in each nominal load case (`lip_load`, at the swing's
+        turning point): the weight alone, or with an inertial load the lift and the transport at
+        each of NOMINAL_TRANSPORT_AZIMUTHS, for grasps of contact `frames` (N, 3, 3) and their `seal`."""
+        count = len(frames)
+        weight = np.broadcast_to(self.object.gravity_force, (count, 3))
+        inertial = np.zeros((count, 1, 3))
+        motion = self.config.perturbation
+        if motion.inertial_acceleration > 0.0:
+            azimuths = np.broadcast_to(NOMINAL_TRANSPORT_AZIMUTHS, (count, len(NOMINAL_TRANSPORT_AZIMUTHS)))
+            inertial = inertial_forces(self.object.mass, self.object.gravity, motion.inertial_acceleration, frames,
+                                       azimuths, motion.lift_acceleration)
+        com = np.broadcast_to(self.object.com, (count, 3))
+        cases = arrivals(self.object, motion, self.config.cup, weight, inertial)
+        return [lip_load(weight + inertial[:, case], com, seal.ring_centre, frames, self.config.cup,
+                         None if cases is None else cases[case])
+                for case in range(inertial.shape[1])]
 
     def robust(
         self,

@@ -215,11 +215,20 @@ class NormStats:
         if images.ndim != 4 or images.shape[1] != self.image_channels:
             raise ValueError(f"images {tuple(images.shape)}: expected (B, {self.image_channels}, H, W) for "
                              f"normalisation statistics of {self.image_channels} channel(s)")
-        mean = torch.tensor(self.pose_mean, dtype=poses.dtype, device=poses.device)
-        std = torch.tensor(self.pose_std, dtype=poses.dtype, device=poses.device)
         image_mean = torch.tensor(self.image_mean, dtype=images.dtype, device=images.device).reshape(1, -1, 1, 1)
         image_std = torch.tensor(self.image_std, dtype=images.dtype, device=images.device).reshape(1, -1, 1, 1)
-        return (images - image_mean) / image_std, (poses - mean) / std
+        return (images - image_mean) / image_std, self.normalise_poses(poses)
+
+    def normalise_poses(self, poses: torch.Tensor) -> torch.Tensor:
+        """The pose stream's input from poses (B, 2): each dimension standardised."""
+        mean = torch.tensor(self.pose_mean, dtype=poses.dtype, device=poses.device)
+        std = torch.tensor(self.pose_std, dtype=poses.dtype, device=poses.device)
+        return (poses - mean) / std
+
+    def channel(self, index: int) -> tuple[float, float]:
+        """Mean and standard deviation of image channel `index` (0: the grasp thumbnail), for
+        inputs normalised one channel at a time (the dense GQ-CNN's lattices)."""
+        return float(np.atleast_1d(self.image_mean)[index]), float(np.atleast_1d(self.image_std)[index])
 
 
 @dataclass(frozen=True)

@@ -154,9 +154,7 @@ class FCGQCNNPolicy:
         views = [(cfg.thumbnail, depth)]  # (thumbnail geometry, image it samples) per image stream
         if len(dense.streams) == 2:
             views.append((cfg.context_thumbnail, context_image(depth, cfg.context_thumbnail)))
-        image_mean = np.atleast_1d(model.stats.image_mean)
-        image_std = np.atleast_1d(model.stats.image_std)
-        pose_in = torch.from_numpy(((poses - model.stats.pose_mean) / model.stats.pose_std).astype(np.float32))
+        pose_in = model.stats.normalise_poses(torch.from_numpy(poses.astype(np.float32)))
         with torch.no_grad():
             for k in used:
                 mine = np.flatnonzero(bins == k)
@@ -165,7 +163,8 @@ class FCGQCNNPolicy:
                     points_uv, at = lattice_positions(pixels[mine], k * step, thumbnail)
                     lattice = ndimage.map_coordinates(image, [points_uv[..., 1], points_uv[..., 0]], order=1,
                                                       mode="nearest")
-                    lattice = ((lattice - image_mean[stream]) / image_std[stream]).astype(np.float32)
+                    mean, std = model.stats.channel(stream)
+                    lattice = ((lattice - mean) / std).astype(np.float32)
                     maps = dense.streams[stream].trunk(torch.from_numpy(lattice)[None, None])
                     # ~(pitch)^2 neighbouring pixels share a window: its features are computed once
                     width = lattice.shape[1]

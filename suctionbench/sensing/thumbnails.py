@@ -171,11 +171,11 @@ def _sample_coordinates(pixels: np.ndarray, angles: np.ndarray, config: Thumbnai
     module docstring for the geometry)."""
     n, step = config.out_size, config.crop_size / config.out_size
     offsets = (np.arange(n) - config.centre) * step  # image pixels from the grasp, per thumbnail index
-    cos, sin = np.cos(angles)[:, None, None], np.sin(angles)[:, None, None]
-    down = offsets[None, :, None]  # along d = (cos, sin), by thumbnail row
-    right = offsets[None, None, :]  # along e = (sin, -cos), by thumbnail column
-    u = pixels[:, 0, None, None] + right * sin + down * cos
-    v = pixels[:, 1, None, None] - right * cos + down * sin
+    d, e = (axis[:, None, None, :] for axis in thumbnail_axes(angles))  # (N, 1, 1, 2) = (du, dv)
+    down = offsets[None, :, None]  # along d, by thumbnail row
+    right = offsets[None, None, :]  # along e, by thumbnail column
+    u = pixels[:, 0, None, None] + right * e[..., 0] + down * d[..., 0]
+    v = pixels[:, 1, None, None] + right * e[..., 1] + down * d[..., 1]
     return np.stack([v, u])
 
 

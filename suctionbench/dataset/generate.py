@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from suctionbench.config import STANDARD_GRAVITY, LabelConfig, to_dict
-from suctionbench.dataset.storage import CARD_NAME, FIELDS
+from suctionbench.dataset.storage import FIELDS, SPLIT_DIR, TENSOR_DIR
 from suctionbench.errors import InputError
 from suctionbench.io import atomic_path
 from suctionbench.sensing.noise import DepthNoiseConfig
@@ -323,7 +323,7 @@ def generate_dataset(
     write_splits(out, stats.pop("image_ids"), stats.pop("object_ids"), val_fraction=0.2, seed=config.seed)
     this_run["assembly_seconds"] = round(time.perf_counter() - assemble, 1)
     card.update(stats, status="complete", regenerated_corrupt_units=corrupt, rewritten_shard_problems=shard_problems,
-                generation=_generation_summary(runs, len(units), DatasetReader(out)))
+                generation=_generation_summary(runs, len(units), out, stats["datapoints"]))
     write_card(out, card, datapoints_per_shard=config.datapoints_per_shard)
     return card
 
@@ -340,19 +340,18 @@ def _earlier_runs(out: Path) -> list[dict[str, Any]]:
     return [dict(r) for r in runs if isinstance(r, dict)] if isinstance(runs, list) else []
 
 
-def _generation_summary(runs: list[dict[str, Any]], units: int, reader: Any) -> dict[str, Any]:
+def _generation_summary(runs: list[dict[str, Any]], units: int, out: Path, datapoints: int) -> dict[str, Any]:
     """Generation time and size for the card: the recorded runs' wall-clock seconds, datapoints and
     rate, how many units were made before any record (resumed from an older run), and the bytes on
     disk of the shards and splits (not the per-unit files resuming needs)."""
     seconds = sum(float(r.get("seconds", 0.0)) for r in runs)
     made = sum(int(r.get("datapoints", 0)) for r in runs)
     timed_units = sum(int(r.get("units", 0)) for r in runs)
-    size = sum(p.stat().st_size for p in Path(reader.directory).rglob("*")
-               if p.is_file() and "units" not in p.parts and p.name != CARD_NAME)  # shards and splits
+    size = sum(p.stat().st_size for sub in (TENSOR_DIR, SPLIT_DIR) for p in (out / sub).rglob("*") if p.is_file())
     return {"recorded_seconds": round(seconds, 1), "recorded_datapoints": made,
             "datapoints_per_s": round(made / seconds, 1) if seconds > 0 else None,
             "untimed_units": units - timed_units, "bytes": size,
-            "bytes_per_datapoint": round(size / max(reader.num_datapoints, 1), 1)}
+            "bytes_per_datapoint": round(size / max(datapoints, 1), 1)}
 
 
 def _assemble_shards(out: Path, units: list[Unit], writer: Any, per_shard: int, threshold: float) -> dict[str, Any]:

@@ -226,6 +226,7 @@ def _file_state(directory: Path) -> dict[str, list[int]] | None:
     try:
         paths = [directory / CARD_NAME] + sorted(p for sub in (TENSOR_DIR, SPLIT_DIR)
                                                  for p in (directory / sub).rglob("*") if p.is_file())
-        return {str(p.relative_to(directory)): [p.stat().st_size, p.stat().st_mtime_ns] for p in paths}
+        stats = {str(p.relative_to(directory)): p.stat() for p in paths}
     except OSError:
         return None
+    return {name: [st.st_size, st.st_mtime_ns] for name, st in stats.items()}

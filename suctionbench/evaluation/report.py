@@ -310,19 +310,17 @@ def _object_cards(per_object: dict[str, dict[str, list[int]]], out: Path) -> lis
 
 def _gallery(run_dir: Path, failed: list[dict[str, Any]], out: Path, label: str) -> list[tuple[str, str]]:
     """Depth crops (96 x 96 px) around the executed grasp of up to GALLERY_PER_RUN failed trials."""
-    from suctionbench.runlog.reader import depth_image, iter_messages
     from suctionbench.sensing.image import save_png
 
     items = []
     for r in [r for r in failed if r.get("grasp_world")][:GALLERY_PER_RUN]:  # failures that executed a grasp
         path = Path(r["log"])
-        depth_msg = next(iter_messages(path, "/camera/depth"), None)  # the first frame: what the policy saw
-        pixel = _grasp_pixel(path, r)
-        if depth_msg is None or pixel is None:
+        view = _planned_view(path, r)
+        if view is None:
             continue
-        crop = _crop(depth_image(depth_msg[1]), int(round(pixel[0])), int(round(pixel[1])), 48)
+        depth, (u, v) = view
         name = f"fail_{run_dir.name}_{path.stem}.png"
-        save_png(out / name, crop)
+        save_png(out / name, _crop(depth, int(round(u)), int(round(v)), 48))
         items.append((name, f"{label}: {r['object']} - {r['failure']}"))
     return items
 
@@ -331,7 +329,7 @@ def _quality_gallery(run_dir: Path, records: list[dict[str, Any]], out: Path, la
     """Quality maps (`figures.quality_overlay`) of up to QUALITY_MAPS_PER_RUN trials whose log has
     one (a dense policy's), successes and failures alternating."""
     from suctionbench.evaluation.figures import quality_overlay
-    from suctionbench.runlog.reader import depth_image, float_image, iter_messages
+    from suctionbench.runlog.reader import float_image, iter_messages
     from suctionbench.runlog.writer import TOPIC_QUALITY_MAP
     from suctionbench.sensing.image import save_png
 
@@ -346,30 +344,32 @@ def _quality_gallery(run_dir: Path, records: list[dict[str, Any]], out: Path, la
         quality_msg = next(iter_messages(path, TOPIC_QUALITY_MAP), None)
         if quality_msg is None:  # not a dense policy's log: none of this run's trials has one
             break
-        depth_msg = next(iter_messages(path, "/camera/depth"), None)
         quality = float_image(quality_msg[1], "quality map")
-        if depth_msg is None or not np.isfinite(quality).any():
+        view = _planned_view(path, r)
+        if view is None or not np.isfinite(quality).any():
             continue
         name = f"quality_{run_dir.name}_{path.stem}.png"
-        save_png(out / name, quality_overlay(depth_image(depth_msg[1]), quality, _grasp_pixel(path, r)))
+        save_png(out / name, quality_overlay(view[0], quality, view[1]))
         outcome = "success" if r.get("success") else r.get("failure") or "failure"
         q = r.get("policy_q")
         items.append((name, f"{label}: {r['object']} - {outcome}" + ("" if q is None else f", q {q:.2f}")))
     return items
 
 
-def _grasp_pixel(path: Path, record: dict[str, Any]) -> tuple[float, float] | None:
-    """Image (u, v) of a trial's executed grasp point in the camera of its log (None without one)."""
-    from suctionbench.runlog.reader import iter_messages
+def _planned_view(path: Path, record: dict[str, Any]) -> tuple[np.ndarray, tuple[float, float]] | None:
+    """The depth image a trial's policy planned on (its log's first frame) and the image (u, v) of
+    the executed grasp point in that camera; None if the log lacks them."""
+    from suctionbench.runlog.reader import depth_image, iter_messages
 
+    depth_msg = next(iter_messages(path, "/camera/depth"), None)
     calib = next(iter_messages(path, "/camera/calibration"), None)
-    if calib is None or not record.get("grasp_world"):
+    if depth_msg is None or calib is None or not record.get("grasp_world"):
         return None
     k = np.asarray(calib[1]["K"], dtype=float).reshape(3, 3)
     pose = _camera_pose(path)
     p_cam = (np.asarray(record["grasp_world"][:3]) - pose[:3, 3]) @ pose[:3, :3]
     u, v = (k @ p_cam)[:2] / p_cam[2]
-    return float(u), float(v)
+    return depth_image(depth_msg[1]), (float(u), float(v))
 
 
 def _camera_pose(path: Path) -> np.ndarray:

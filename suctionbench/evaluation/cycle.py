@@ -29,12 +29,13 @@ PLANNING_S: dict[str, float] = {
     "planarity": 0.02,
     "planarity-centroid": 0.03,
     "gqcnn": 0.15,
-    "fc-gqcnn": 0.06,
+    "fc-gqcnn": 0.05,
 }
 """Planning time (s per grasp) per built-in image policy. Heuristics: `suctionbench bench plan`
 (0.013-0.028 s, rounded up); gqcnn (shipped compact model, CEM with batched network calls): 0.13-0.18
-s measured inside the benchmark runs of eval/README.md, 0.15 s; fc-gqcnn (the same model, dense): 0.061 s
-(`suctionbench bench plan --policies gqcnn,fc-gqcnn --scenes 5 --cores 2`, CEM 0.069 s in that run), 0.06 s.
+s measured inside the benchmark runs of eval/README.md, 0.15 s; fc-gqcnn (the same model, dense): 0.043-0.045 s
+(`suctionbench bench plan --policies gqcnn,fc-gqcnn --scenes 5 --cores 2`, twice on the idle machine; CEM
+0.055-0.056 s in those runs), 0.05 s.
 For scale, the paper's Dex-Net 3.0
 GQ-CNN policy took about 3.0 s per grasp on a GeForce 980 desktop."""
 

@@ -14,7 +14,8 @@ from suctionbench.evaluation.tasks import load_task
 from suctionbench.runlog.reader import read_run
 from suctionbench.sim.episode import FAILURES
 
-POLICIES = ["random", "centroid", "planarity", "planarity-centroid", "gqcnn", "fc-gqcnn", "analytic", "random-surface"]
+POLICIES = ["random", "centroid", "planarity", "planarity-centroid", "gqcnn", "fc-gqcnn", "gqcnn-adv", "analytic",
+            "random-surface"]
 """Every built-in policy: CI's one real pick each (`test_smoke_list_covers_every_policy` keeps it complete)."""
 
 

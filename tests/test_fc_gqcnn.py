@@ -13,10 +13,10 @@ from test_policies import OBJECTS, Scene
 from suctionbench.learning.checkpoint import load_model
 from suctionbench.policies.base import make_policy, scene_cloud
 from suctionbench.policies.fc_gqcnn import lattice_positions
-from suctionbench.resources import asset_path
+from suctionbench.policies.gqcnn import default_model_dir
 from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN, extract_thumbnails, project_grasps
 
-MODEL_DIR = asset_path("models", "gqcnn-compact")
+MODEL_DIR = default_model_dir()
 
 
 def test_lattice_window_is_the_thumbnail_of_its_centre():
@@ -69,11 +69,17 @@ def _dense_windows(model, configs, count: int, seed: int):
 def test_dense_q_is_the_network_on_each_pixels_window():
     # refine 0: the dense map itself. At every valid pixel its q is the thumbnail network's q on
     # the thumbnail centred on the pixel's lattice window, at its bin's angle, with the pixel's own
-    # pose: normalisation, pose rows, window indices and bins all checked together.
-    model = load_model(MODEL_DIR)
+    # pose: normalisation, pose rows, window indices and bins all checked together (a one-stream net).
+    from suctionbench.learning.checkpoint import GQCNNModel
+    from suctionbench.learning.data import NormStats
+    from suctionbench.learning.models import build_model
+
+    stats = NormStats(0.58, 0.1, (0.57, 0.2), (0.1, 1.0), count=1)  # wide: random weights stay unsaturated
+    model = GQCNNModel(build_model("compact", torch.Generator().manual_seed(3)), stats, {"arch": "compact"})
     policy, observation, dense, pick, turn, [centres] = _dense_windows(model, [THUMBNAIL_GQCNN], 60, 0)
     thumbnails = extract_thumbnails(observation.depth, centres, turn)
     want = model.predict(thumbnails, dense["poses"][pick])
+    assert want.std() > 1e-3  # the check can tell positions apart
     np.testing.assert_allclose(dense["q"][pick], want, rtol=0, atol=1e-5)
     action = policy.plan(observation, np.random.default_rng(0))
     assert action.q == pytest.approx(float(dense["q"].max()))

@@ -23,9 +23,11 @@ PAPER_RESULTS: dict[str, dict[str, tuple[int, int]]] = {
     "centroid": {"basic": (92, 89), "typical": (78, 80), "adversarial": (38, 47)},
     "planarity-centroid": {"basic": (94, 98), "typical": (86, 94), "adversarial": (62, 64)},
     "gqcnn": {"basic": (98, 99), "typical": (82, 97), "adversarial": (58, 61)},
+    "gqcnn-adv": {"basic": (77, 83), "typical": (67, 75), "adversarial": (81, 86)},
 }
-"""Novel objects, physical trials: policy -> set -> (success rate %, AP %). GQ-CNN: the Dex-Net 3.0
-model (the paper also reports a GQ-CNN trained on adversarial objects: 77 (83) / 67 (75) / 81 (86))."""
+"""Novel objects, physical trials: policy -> set -> (success rate %, AP %). gqcnn: the Dex-Net 3.0
+model trained on the training corpus; gqcnn-adv: its "GQ-CNN (ADV)", trained on the adversarial
+objects only."""
 
 PAPER_KNOWN: dict[str, tuple[int, int]] = {"pc3d": (88, 80), "ss": (89, 84), "wr": (93, 80), "rwr": (100, 92)}
 """Known objects (adversarial set, shape and pose known, top-ranked grasp per metric): (AP %, success %)."""

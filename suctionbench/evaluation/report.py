@@ -35,7 +35,8 @@ from suctionbench.validate import output_dir
 __all__ = ["PAPER_KNOWN", "PAPER_RANDOM", "PAPER_RESULTS", "build_report", "expand_run_dirs",
            "success_attempt_curve"]
 
-POLICY_ORDER = ("random", "planarity", "centroid", "planarity-centroid", "gqcnn", "fc-gqcnn")
+POLICY_ORDER = ("random", "planarity", "centroid", "planarity-centroid", "gqcnn", "fc-gqcnn",
+                "gqcnn-adv")
 """Row order of the policies x sets table (the paper's, weakest baseline first)."""
 
 GALLERY_PER_RUN = 6

@@ -458,7 +458,7 @@ class SplitData:
         groups = [shards[i:i + pool_size] for i in range(0, len(shards), pool_size)]
         return _load_ahead(lambda group: _concat([self.load_shard(s) for s in group]), groups)
 
-    def batches(self, batch_size: int, rng: np.random.Generator | None = None, shuffle_shards: int = 4
+    def batches(self, batch_size: int, rng: np.random.Generator | None = None, shuffle_shards: int = 64
                 ) -> Iterator[Batch]:
         """One pass over the split in batches of `batch_size` (the last may be smaller).
 

@@ -171,6 +171,7 @@ POLICIES: dict[str, str] = {
     "planarity": "suctionbench.policies.heuristics:PlanarityPolicy",
     "planarity-centroid": "suctionbench.policies.heuristics:PlanarityCentroidPolicy",
     "gqcnn": "suctionbench.policies.gqcnn:make_gqcnn_policy",
+    "gqcnn-adv": "suctionbench.policies.gqcnn:make_gqcnn_adv_policy",
     "fc-gqcnn": "suctionbench.policies.fc_gqcnn:make_fc_gqcnn_policy",
 }
 """Registered image policies: name -> "module:attribute" of a factory taking keyword arguments.

@@ -69,8 +69,12 @@ from suctionbench.sensing.thumbnails import (
     project_grasps,
 )
 
-DEFAULT_MODEL = ("models", "gqcnn-compact")
+DEFAULT_MODEL = ("models", "gqcnn-context")
 """Path parts, under assets/, of the model `make_policy("gqcnn")` loads when given none."""
+
+ADV_MODEL = ("models", "gqcnn-adv")
+"""Path parts, under assets/, of the model trained only on the adversarial set's objects: the
+paper's "GQ-CNN (ADV)" row, `make_policy("gqcnn-adv")`."""
 
 
 @runtime_checkable
@@ -392,6 +396,12 @@ def make_gqcnn_policy(
     directory (loaded on first use), or None for the shipped default (`default_model_dir`).
     A missing directory raises InputError."""
     return GQCNNPolicy(resolve_model(model), config, **overrides)
+
+
+def make_gqcnn_adv_policy(config: CEMConfig | None = None, **overrides: Any) -> GQCNNPolicy:
+    """Registry factory for "gqcnn-adv" (Dex-Net 3.0's "GQ-CNN (ADV)"): the CEM policy with the
+    shipped model trained only on datapoints of the adversarial set's objects (`ADV_MODEL`)."""
+    return GQCNNPolicy(resolve_model(asset_path(*ADV_MODEL)), config, **overrides)
 
 
 def resolve_model(model: GraspQualityModel | str | Path | None) -> GraspQualityModel:

@@ -53,6 +53,18 @@ def test_dense_context_net_equals_two_stream_network():
                              for a, b, c, d in zip(gr.tolist(), gc.tolist(), cr.tolist(), cc.tolist(), strict=True)])
         want = net(pairs, poses)
     torch.testing.assert_close(got, want, rtol=1e-5, atol=1e-5)
+    # shared windows: each stream's distinct windows once, positions mapped to them; the merge's
+    # first layer split by stream (linear, so W [f1; f2; fp] = W1 f1 + W2 f2 + Wp fp) gives the
+    # same logits as the features repeated per position
+    with torch.no_grad():
+        f1 = dense.streams[0].features(dense.streams[0].trunk(grasp), zero[:5], gr[:5], gc[:5])
+        f2 = dense.streams[1].features(dense.streams[1].trunk(context), zero[:2], cr[:2], cc[:2])
+        i1, i2 = torch.randint(0, 5, (count,), generator=gen), torch.randint(0, 2, (count,), generator=gen)
+        torch.testing.assert_close(dense.merge([f1, f2], poses, [i1, i2]), dense.merge([f1[i1], f2[i2]], poses),
+                                   rtol=1e-5, atol=1e-5)
+        torch.testing.assert_close(dense.merge([f1[i1], f2[i2]], poses),
+                                   net.merge(torch.cat([f1[i1], f2[i2], net.pose_stream(poses)], dim=1)),
+                                   rtol=1e-5, atol=1e-5)
     with pytest.raises(ValueError, match="2 image streams"):
         dense.head([dense.streams[0].trunk(grasp)], [(zero, gr, gc)], poses)
 

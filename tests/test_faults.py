@@ -74,6 +74,27 @@ def test_pool_workers_die_with_their_killed_parent():
     assert not left, f"workers {left} outlived their parent by {ORPHAN_GRACE_S} s"
 
 
+
+def _threads() -> tuple[str, int]:
+    import torch
+
+    return os.environ["OMP_NUM_THREADS"], torch.get_num_threads()
+
+
+def test_pool_workers_share_the_cores(monkeypatch):
+    # Each of N workers gets cpu_count // N threads for torch (and OpenMP / BLAS): N full-size
+    # pools on the same cores oversubscribe them. A size the user set is kept.
+    from suctionbench.parallel import THREAD_VARIABLES, process_pool
+
+    for name in THREAD_VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    with process_pool(2) as pool:
+        assert pool.submit(_threads).result() == ("1", 1)
+    monkeypatch.setenv("OMP_NUM_THREADS", "7")
+    with process_pool(2) as pool:
+        assert pool.submit(_threads).result()[0] == "7"
+
 def child_pids(pid: int) -> list[int]:
     out = subprocess.run(["pgrep", "-P", str(pid)], capture_output=True, text=True).stdout
     return [int(p) for p in out.split()]

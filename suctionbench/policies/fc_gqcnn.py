@@ -158,7 +158,7 @@ class FCGQCNNPolicy:
         with torch.no_grad():
             for k in used:
                 mine = np.flatnonzero(bins == k)
-                features = []
+                features, shared = [], []
                 for stream, (thumbnail, image) in enumerate(views):
                     points_uv, at = lattice_positions(pixels[mine], k * step, thumbnail)
                     lattice = ndimage.map_coordinates(image, [points_uv[..., 1], points_uv[..., 0]], order=1,
@@ -171,8 +171,9 @@ class FCGQCNNPolicy:
                     flat, share = np.unique(at[:, 0] * width + at[:, 1], return_inverse=True)
                     at = torch.from_numpy(np.column_stack(np.divmod(flat, width)))
                     zeros = torch.zeros(len(at), dtype=torch.long)
-                    features.append(dense.streams[stream].features(maps, zeros, at[:, 0], at[:, 1])[share])
-                logits = dense.merge(features, pose_in[mine])
+                    features.append(dense.streams[stream].features(maps, zeros, at[:, 0], at[:, 1]))
+                    shared.append(torch.from_numpy(share.reshape(-1)))
+                logits = dense.merge(features, pose_in[mine], shared)
                 q[mine] = torch.softmax(logits, dim=1)[:, 1].double().numpy()
         return {"rows": rows, "cols": cols, "pixels": pixels, "points": points, "approaches": approaches,
                 "poses": poses, "q": q, "rotations": len(used)}

@@ -72,6 +72,8 @@ def test_one_real_pick_per_policy(policy):
         (["--policy", "centroid", "--set", "no_such_set"], "no_such_set"),
         (["--policy", "centroid", "--task", "no_such_task"], "no_such_task"),
         (["--policy", "gqcnn", "--set", "basic", "--model", "/no/such/model"], "model"),
+        (["--policy", "gqcnn-adv", "--set", "basic", "--model", "assets/models/gqcnn-context"], "reads no model"),
+        (["--policy", "planarity", "--set", "basic", "--model", "assets/models/gqcnn-context"], "reads no model"),
         (["--policy", "centroid"], "--set"),
         (["--policy", "centroid", "--set", "basic", "--engine", "spark"], "spark"),
         (["--policy", "centroid", "--set", "basic", "--cup", "huge"], "huge"),

@@ -107,6 +107,9 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
     policy_args = dict(policy_args or {})
     label = policy_label(policy, policy_args)
     command = command or _invocation()
+    if model and builtin_name(canonical_spec(policy)) not in MODEL_POLICIES:
+        raise InputError(f"--model: policy '{policy}' reads no model given this way (only "
+                         f"{', '.join(MODEL_POLICIES)} do); a plug-in takes its options with --policy-arg")
     if policy in ("analytic", "random-surface"):
         if policy_args:
             raise InputError(f"--policy-arg: the known-state policy '{policy}' takes no options")

@@ -401,7 +401,11 @@ def make_gqcnn_policy(
 def make_gqcnn_adv_policy(config: CEMConfig | None = None, **overrides: Any) -> GQCNNPolicy:
     """Registry factory for "gqcnn-adv" (Dex-Net 3.0's "GQ-CNN (ADV)"): the CEM policy with the
     shipped model trained only on datapoints of the adversarial set's objects (`ADV_MODEL`)."""
-    return GQCNNPolicy(resolve_model(asset_path(*ADV_MODEL)), config, **overrides)
+    path = asset_path(*ADV_MODEL)
+    if not path.exists():
+        raise InputError(f"policy 'gqcnn-adv': its model '{path}' is not installed; run gqcnn with --model DIR "
+                         "for another model")
+    return GQCNNPolicy(LazyModel(path), config, **overrides)
 
 
 def resolve_model(model: GraspQualityModel | str | Path | None) -> GraspQualityModel:

@@ -5,7 +5,8 @@ loads it whole: `SplitData` keeps only the split's datapoint indices (8 bytes a 
 one shard at a time through `DatasetReader` (hash-checked against its manifest). An epoch visits
 the shards in a random order, pools `shuffle_shards` of them at a time, shuffles the pool and cuts
 it into batches; what is left over joins the next pool, so every training datapoint is seen exactly
-once per epoch and memory stays at a few shards whatever the dataset size. The next pool is read
+once per epoch and memory stays at two pools whatever the dataset size (64 shards by default: a
+shard holds one or two objects, so a pool mixes ~40 of them; `TrainConfig.shuffle_shards`). The next pool is read
 on a background thread while the current one trains (decompression and hashing release the GIL).
 All randomness comes from a `numpy.random.Generator` the caller passes in and checkpoints.
 

@@ -14,7 +14,8 @@ Algorithm (one `plan`)
    thumbnail of the grasp at its centre, and `learning.dense.DenseGQCNN` scores them all: its
    trunk once per lattice, its head at the window nearest each pixel (at most 2.1 pixels off, the
    half-diagonal of the 3-pixel pitch). About 9 neighbouring pixels share a window, so its fully
-   connected features are computed once and only the pose stream and merge run per pixel.
+   connected features and their share of the merge's first layer are computed once per window;
+   only the pose stream and the rest of the merge run per pixel (`DenseGQCNN.merge`).
 3. The quality map is q at every valid pixel (NaN elsewhere). The `refine` best pixels are scored
    again exactly (their own thumbnails at their own angles, `GQCNNPolicy.score`), and the best of
    those is the grasp, so the reported q is the network's own for the grasp executed (with

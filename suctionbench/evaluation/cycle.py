@@ -30,7 +30,6 @@ PLANNING_S: dict[str, float] = {
     "planarity-centroid": 0.03,
     "gqcnn": 0.1,
     "fc-gqcnn": 0.07,
-    "gqcnn-adv": 0.1,
 }
 """Planning time (s per grasp) per built-in image policy, as `suctionbench bench plan --policies
 gqcnn,fc-gqcnn --scenes 5 --cores 2` measures it on the idle 2-core development machine (a robot's
@@ -40,6 +39,7 @@ network; fc-gqcnn (the same model, dense): 0.066 s. (The compact model before it
 dense 0.043-0.045 s; gqcnn was then modelled at 0.15 s from plan times inside benchmark runs,
 where two workers and the simulation share the cores.) For scale, the paper's Dex-Net 3.0
 GQ-CNN policy took about 3.0 s per grasp on a GeForce 980 desktop."""
+PLANNING_S["gqcnn-adv"] = PLANNING_S["gqcnn"]  # the same CEM policy and network, other weights
 
 DEFAULT_PLANNING_S = PLANNING_S["gqcnn"]
 """Planning time of a user or plug-in policy, whose cost the benchmark cannot know: a learned

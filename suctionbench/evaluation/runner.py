@@ -107,7 +107,8 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
     policy_args = dict(policy_args or {})
     label = policy_label(policy, policy_args)
     command = command or _invocation()
-    if model and builtin_name(canonical_spec(policy)) not in MODEL_POLICIES:
+    reads_model = builtin_name(canonical_spec(policy)) in MODEL_POLICIES
+    if model and not reads_model:
         raise InputError(f"--model: policy '{policy}' reads no model given this way (only "
                          f"{', '.join(MODEL_POLICIES)} do); a plug-in takes its options with --policy-arg")
     if policy in ("analytic", "random-surface"):
@@ -117,7 +118,7 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
     else:
         spec = canonical_spec(policy)
         kwargs = dict(policy_args)
-        if builtin_name(spec) in MODEL_POLICIES:
+        if reads_model:
             _check_model(kwargs.get("model", model))
             if model:
                 kwargs.setdefault("model", model)

@@ -148,6 +148,12 @@ def _channel_values(value: Any) -> float | tuple[float, ...]:
     return float(value)
 
 
+SHUFFLE_SHARDS = 64
+"""Shards pooled and shuffled together by default (`SplitData.batches`, `TrainConfig.shuffle_shards`).
+A generated shard holds one or two objects' datapoints, so the pool sets how many objects a stretch
+of batches mixes: with 4 shards (2-3 objects) the net chased the objects of the moment (2.8 M
+datapoints, context, first epoch: running accuracy 0.864, held-out 0.771 at loss 0.63)."""
+
 @dataclass(frozen=True)
 class NormStats:
     """Input normalisation of a GQ-CNN: x_normalised = (x - mean) / std, per image channel.
@@ -459,8 +465,8 @@ class SplitData:
         groups = [shards[i:i + pool_size] for i in range(0, len(shards), pool_size)]
         return _load_ahead(lambda group: _concat([self.load_shard(s) for s in group]), groups)
 
-    def batches(self, batch_size: int, rng: np.random.Generator | None = None, shuffle_shards: int = 64
-                ) -> Iterator[Batch]:
+    def batches(self, batch_size: int, rng: np.random.Generator | None = None,
+                shuffle_shards: int = SHUFFLE_SHARDS) -> Iterator[Batch]:
         """One pass over the split in batches of `batch_size` (the last may be smaller).
 
         With `rng`: shards in random order, datapoints shuffled within pools of `shuffle_shards`

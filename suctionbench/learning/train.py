@@ -65,6 +65,7 @@ from suctionbench.learning.checkpoint import (
 from suctionbench.learning.data import (
     AUGMENT_GQCNN,
     METRIC_FIELD,
+    SHUFFLE_SHARDS,
     AugmentConfig,
     NormStats,
     SplitData,
@@ -149,12 +150,9 @@ class TrainConfig:
     """Validate on a seeded random subset of at most this many validation datapoints (None: all;
     a 2.8 M-datapoint dataset's 20 % split takes minutes to score after every epoch on a CPU)."""
 
-    shuffle_shards: int = 64
-    """Shards pooled and shuffled together (memory ~ twice this x one shard: 4 MB per 1000 grasp
-    thumbnails, 8 MB with context). A generated shard holds one or two objects' datapoints, so the
-    pool sets how many objects a stretch of batches mixes: with 4 shards (2-3 objects) the net
-    chased the objects of the moment (2.8 M datapoints, context, first epoch: running accuracy
-    0.864, held-out 0.771 at loss 0.63)."""
+    shuffle_shards: int = SHUFFLE_SHARDS
+    """Shards pooled and shuffled together (`learning.data.SHUFFLE_SHARDS`: why 64; memory ~ twice
+    this x one shard: 4 MB per 1000 grasp thumbnails, 8 MB with context)."""
 
     fit_datapoints: int = 20_000
     """Training datapoints (a fixed random subset of the training split, in whole shards) scored without

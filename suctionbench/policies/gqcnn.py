@@ -401,11 +401,7 @@ def make_gqcnn_policy(
 def make_gqcnn_adv_policy(config: CEMConfig | None = None, **overrides: Any) -> GQCNNPolicy:
     """Registry factory for "gqcnn-adv" (Dex-Net 3.0's "GQ-CNN (ADV)"): the CEM policy with the
     shipped model trained only on datapoints of the adversarial set's objects (`ADV_MODEL`)."""
-    path = asset_path(*ADV_MODEL)
-    if not path.exists():
-        raise InputError(f"policy 'gqcnn-adv': its model '{path}' is not installed; run gqcnn with --model DIR "
-                         "for another model")
-    return GQCNNPolicy(LazyModel(path), config, **overrides)
+    return GQCNNPolicy(shipped_model(asset_path(*ADV_MODEL), "adversarial-trained model"), config, **overrides)
 
 
 def resolve_model(model: GraspQualityModel | str | Path | None) -> GraspQualityModel:
@@ -413,11 +409,14 @@ def resolve_model(model: GraspQualityModel | str | Path | None) -> GraspQualityM
     loaded on first use (`LazyModel`), or None for the shipped default (InputError if it is not
     installed)."""
     if model is None:
-        path = default_model_dir()
-        if not path.exists():
-            raise InputError(
-                f"GQ-CNN policy: no model given and the default model '{path}' is not installed; "
-                "pass model=PATH to a trained model directory"
-            )
-        return LazyModel(path)
+        return shipped_model(default_model_dir(), "default model")
     return LazyModel(model) if isinstance(model, str | Path) else model
+
+
+def shipped_model(path: Path, what: str) -> LazyModel:
+    """The model shipped at `path` under assets/ (`default_model_dir`, `ADV_MODEL`; `what` names it
+    in the error), loaded on first use; InputError if it is not installed."""
+    if not path.exists():
+        raise InputError(f"GQ-CNN policy: no model given and the {what} '{path}' is not installed; pass "
+                         "model=PATH (--model DIR for gqcnn and fc-gqcnn) to a trained model directory")
+    return LazyModel(path)

@@ -278,6 +278,11 @@ SEAL_MODELS = ("lip", "springs")
 STANDARD_GRAVITY = 9.80665
 """Standard gravity in m/s^2."""
 
+TOUCH_DOWN_COMPRESSION = 0.004
+"""Compression (m) of the bellows at which a pick's guarded touch-down stops (the episode's
+EpisodeConfig.compression_stop, two thirds of the default cup's 6 mm stroke): the press the object
+carries while the seal forms, 6 N on the default cup's 1500 N/m bellows."""
+
 CUP_DEFAULT = CupConfig()
 """The physical cup: 15 mm silicone bellows, 60 kPa ejector, V = 60 kPa x pi (6.5 mm)^2 = 7.96 N,
 ring-pressure tilt limit."""
@@ -385,6 +390,18 @@ class PerturbationConfig:
     how fast the transport's inertial load reaches the swing (contact/arrival.py). The episode times
     each transport by the arm's path; 0.87-1.24 s measured on five basic and typical picks."""
 
+    press_compression: float = 0.0
+    """Compression (m) of the bellows at which the pick's touch-down stops and holds while the
+    seal forms (the episode's EpisodeConfig.compression_stop). The object must stay put under the
+    bellows' force k_a x along the approach (contact/press.py); 0 (the paper's quasi-static model)
+    skips that test. `for_episode` sets it to TOUCH_DOWN_COMPRESSION."""
+
+    table_friction: float = 0.6
+    """Coulomb friction between the object and the table it lies on, against sliding under the
+    touch-down's press: the scene's table (SceneConfig.friction; MuJoCo takes the larger of two
+    surfaces' coefficients, and the objects' own, against silicone, are at most 0.5). Dry
+    cardboard, paper or plastic on wood or laminate: 0.3-0.6."""
+
     @property
     def lift_acceleration(self) -> float:
         """Acceleration (m/s^2) of the lift case: the min-jerk lift's peak 5.77 lift_height /
@@ -395,8 +412,9 @@ class PerturbationConfig:
     @classmethod
     def for_episode(cls, cup: CupConfig, **kwargs: Any) -> PerturbationConfig:
         """The environment model of a pick episode: the paper's perturbations plus the inertial load
-        of the cup's peak acceleration (cup.peak_acceleration)."""
-        return cls(inertial_acceleration=cup.peak_acceleration, **kwargs)
+        of the cup's peak acceleration (cup.peak_acceleration) and the touch-down's press."""
+        return cls(**{"inertial_acceleration": cup.peak_acceleration, "press_compression": TOUCH_DOWN_COMPRESSION,
+                      **kwargs})
 
     def __post_init__(self) -> None:
         if self.num_samples < 1:

@@ -11,8 +11,9 @@ import trimesh
 from suctionbench.config import STANDARD_GRAVITY, LabelConfig
 from suctionbench.contact.arrival import table_support
 from suctionbench.contact.metrics import METRICS, GraspLabels
+from suctionbench.contact.press import Footprint, stays_put
 from suctionbench.contact.robust import ObjectState, arrivals, inertial_forces, robust_wrench_resistance
-from suctionbench.contact.seal import SealModel, SealResult
+from suctionbench.contact.seal import PUSHED_AWAY, SealModel, SealResult
 from suctionbench.contact.wrench import lip_load, resists
 from suctionbench.errors import InputError
 from suctionbench.geometry.frames import approach_frames
@@ -61,10 +62,10 @@ class SuctionLabeller:
         gravity = np.asarray(gravity, dtype=float)
         if gravity.shape != (3,) or not np.all(np.isfinite(gravity)):
             raise InputError(f"gravity {gravity.tolist()!r}: must be three finite numbers")
+        hull = np.asarray(self.info.mesh.convex_hull.vertices, dtype=float)
         self.object = ObjectState(com=com, mass=float(mass), gravity=gravity,
                                   inertia=_inertia_about(self.info.mesh, float(mass), com),
-                                  support=table_support(np.asarray(self.info.mesh.convex_hull.vertices, dtype=float),
-                                                        gravity))
+                                  support=table_support(hull, gravity), footprint=Footprint(hull, gravity))
         self.caster = RayCaster(self.info.mesh)
         self.seal_model = SealModel(self.caster, self.config.cup, self.config.seal)
 
@@ -79,9 +80,24 @@ class SuctionLabeller:
         return approach_frames(approaches, self.object.com - points)
 
     def seal(self, points: np.ndarray, approaches: np.ndarray) -> SealResult:
-        """Nominal seal model for each grasp."""
+        """Nominal seal model for each grasp; with a touch-down press in the perturbation model, a
+        seal also needs the object to stay put under it (contact/press.py)."""
         points, approaches = _check_grasps(points, approaches)
-        return self.seal_model.evaluate(points, self.frames(points, approaches))
+        result = self.seal_model.evaluate(points, self.frames(points, approaches))
+        pushed = result.seal & ~self.stays_put(points, approaches)
+        result.seal[pushed] = False
+        result.failure[pushed] = PUSHED_AWAY
+        return result
+
+    def stays_put(self, points: np.ndarray, approaches: np.ndarray) -> np.ndarray:
+        """bool (N,): the object stays at rest while the touch-down presses each grasp (all True
+        without a press in the perturbation model)."""
+        motion = self.config.perturbation
+        if motion.press_compression <= 0.0:
+            return np.ones(len(points), dtype=bool)
+        return stays_put(points, approaches, self.object.com, self.object.gravity_force,
+                         self.config.cup.axial_stiffness * motion.press_compression, self.config.cup.friction,
+                         motion.table_friction, self.object.footprint)
 
     def wrench_resistance(
         self, points: np.ndarray, approaches: np.ndarray, seal: SealResult | None = None

@@ -35,6 +35,7 @@ from scipy.special import ndtr, ndtri
 
 from suctionbench.config import CupConfig, PerturbationConfig
 from suctionbench.contact.arrival import Arrival
+from suctionbench.contact.press import Footprint, stays_put
 from suctionbench.contact.seal import SealModel
 from suctionbench.contact.wrench import lip_load, resists, resists_qp
 from suctionbench.geometry.frames import so3_exp
@@ -63,6 +64,10 @@ class ObjectState:
     support: np.ndarray | None = None
     """(H, 3) the hull vertices (m, mesh frame) the object stands on along `gravity`
     (`arrival.table_support`)."""
+
+    footprint: Footprint | None = None
+    """Where the object touches the table (contact/press.py): with a touch-down press in the
+    perturbation model, a sample must also leave the object at rest under it. None: not tested."""
 
     @property
     def gravity_force(self) -> np.ndarray:
@@ -302,7 +307,12 @@ def robust_wrench_resistance(
         sl = slice(start, start + step)
         samples = sample_perturbations(points[sl], frames[sl], obj, seal.cup, config, seed, ids[sl])
         cases = arrivals(obj, config, seal.cup, samples.force, samples.inertial)
-        outcomes[sl] = run(seal, samples, cases).reshape(-1, j)
+        ok = run(seal, samples, cases)
+        if obj.footprint is not None and config.press_compression > 0.0:
+            ok &= stays_put(samples.points, samples.frames[:, :, 2], samples.com, samples.force,
+                            seal.cup.axial_stiffness * config.press_compression, samples.friction,
+                            config.table_friction, obj.footprint)
+        outcomes[sl] = ok.reshape(-1, j)
         if progress is not None:
             progress(len(samples.points) // j)
     return outcomes.mean(axis=1), outcomes

@@ -96,11 +96,13 @@ from suctionbench.config import CupConfig, SealConfig
 from suctionbench.geometry.raycast import RayCaster
 from suctionbench.vacuum import vacuum_force
 
-FAILURES = ("none", "ring_off_surface", "hole", "cone_collision", "leak", "tilt", "stretch")
+FAILURES = ("none", "ring_off_surface", "hole", "cone_collision", "leak", "tilt", "stretch", "pushed_away")
 """Seal failure reasons, in the order they are reported (the first that applies wins): where the
-lip leaks it usually also stretches (over an edge), and the leak is what loses the vacuum."""
+lip leaks it usually also stretches (over an edge), and the leak is what loses the vacuum. The
+last, "pushed_away", is the labeller's, not the seal model's: the cup would seal, but the object
+slides or tips under the touch-down's press before it does (contact/press.py)."""
 
-RING_OFF_SURFACE, HOLE, CONE_COLLISION, LEAK, TILT, STRETCH = 1, 2, 3, 4, 5, 6
+RING_OFF_SURFACE, HOLE, CONE_COLLISION, LEAK, TILT, STRETCH, PUSHED_AWAY = 1, 2, 3, 4, 5, 6, 7
 
 Gate = Callable[..., np.ndarray]
 """gate(indices, ring_centres, vacuum_forces, lip_heights=None, rim_bound=False) -> bool mask: a

@@ -37,6 +37,8 @@ def test_causes_follow_the_cup_limits():
     assert "tilt tolerance" in seal_cause(_row(True, False, 0.0, False, tilt=20.0), 21.8)
     assert "lip contact" in seal_cause(_row(True, False, 0.0, False, tilt=3.0), 21.8)
     assert seal_cause(_row(True, True, 0.9, True), 21.8) is None
+    # The labeller's lip would seal, but the press pushes the object away (contact/press.py).
+    assert "pushed away" in seal_cause({**_row(False, True, 0.0, False), "label_seal_failure": "pushed_away"}, 21.8)
     # The sim held a grasp whose gravity torque exceeds r (V - m g) / 2: the sim holds more torque.
     assert "peel limit" in lift_cause(_row(True, True, 0.0, True, wr=False, torque_ratio=1.4), 0.5)
     assert "perturbation" in lift_cause(_row(True, True, 0.3, True, wr=True, torque_ratio=0.5), 0.5)

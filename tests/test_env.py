@@ -18,7 +18,8 @@ from suctionbench.errors import InputError
 ENV_ID = "suctionbench/SuctionPick-v0"
 BOX = {"object": "basic/box_tea"}  # 14 x 7 x 7 cm box: a flat face up however it lands
 INFO_KEYS = {
-    "object", "attempt", "success", "valid", "failure", "detail", "label_seal", "label_wr", "label_rwr",
+    "object", "attempt", "success", "valid", "failure", "detail", "label_seal", "label_seal_failure", "label_wr",
+    "label_rwr",
     "label_scores", "grasp_world", "seal_time", "sim_time", "peak_slip", "lifted", "in_bin", "phases", "object_visible",
 }
 

@@ -131,9 +131,11 @@ class SuctionPickEnv(gymnasium.Env):
       `"invalid_action"`) and `detail` (what made an attempt invalid).
     - `label_seal`, `label_wr`, `label_rwr`: the analytic labels (seal formed, wrench resisted,
       robust wrench resistance) of the executed grasp in the true object state at the moment of
-      the grasp, with the environment's cup, and `label_scores` (the score of every 3D metric:
-      pc3d, ss, wr, rwr); `grasp_world`, the executed point and unit approach in the world frame
-      (6,). All five are None for an invalid action.
+      the grasp, with the environment's cup; `label_seal_failure`, why the labeller's seal fails
+      (None where it seals, else one of `suctionbench.contact.FAILURES`, e.g. "pushed_away");
+      `label_scores` (the score of every 3D metric: pc3d, ss, wr, rwr); `grasp_world`, the
+      executed point and unit approach in the world frame (6,). All six are None for an invalid
+      action.
     - `seal_time` (s from the start of the attempt, None without a seal), `sim_time` (simulated
       seconds of the attempt), `peak_slip` (m), `lifted`, `in_bin`, `phases` (simulated time at
       which each phase ended).

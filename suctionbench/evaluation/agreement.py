@@ -71,6 +71,7 @@ def _trials_for_object(set_name: str, key: str, seeds: list[int]) -> list[dict[s
         result = runner.run_after_reset()
         row = {
             "set": set_name, "object": key, "seed": seed, "label_seal": result["label_seal"],
+            "label_seal_failure": result["label_seal_failure"],
             "label_wr": result["label_wr"], "label_rwr": result["label_rwr"],
             "sim_seal": result["seal_time"] is not None, "success": bool(result["success"]),
             "failure": result["failure"], "valid": bool(result["valid"]), "mass": record.mass,
@@ -85,6 +86,8 @@ def seal_cause(row: dict[str, Any], tolerance_deg: float) -> str | None:
     """Why the labeller's nominal seal and the simulated seal disagree (None if they agree)."""
     if row["label_seal"] == row["sim_seal"]:
         return None
+    if row.get("label_seal_failure") == "pushed_away":
+        return "sim seals, labeller does not: object pushed away by the touch-down's press"
     near_limit = row["approach_tilt_deg"] > 0.8 * tolerance_deg
     if row["label_seal"]:
         return ("labeller seals, sim does not: approach near the tilt tolerance" if near_limit

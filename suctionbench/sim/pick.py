@@ -27,7 +27,8 @@ from suctionbench.sim.scene import SceneConfig, build_scene
 KNOWN_STATE_POLICIES = ("analytic", "random-surface")
 """Policies that see the true object state: rank surface grasps by RWR, or draw one uniformly."""
 
-NO_LABELS: dict[str, Any] = dict.fromkeys(("label_seal", "label_wr", "label_rwr", "label_scores"))
+NO_LABELS: dict[str, Any] = dict.fromkeys(("label_seal", "label_seal_failure", "label_wr", "label_rwr",
+                                           "label_scores"))
 """The label fields of a record when no grasp was executed (`PickRunner.label_grasp` fills them)."""
 
 PLACEMENTS = ("drop", "stable")
@@ -230,6 +231,7 @@ class PickRunner:
         labels = labeller.label(point[None], approach[None], self.request.seed, metrics=tuple(METRICS))
         return {
             "label_seal": bool(labels.seal.seal[0]),
+            "label_seal_failure": labels.seal.failure_names[0],
             "label_wr": bool(labels.wr[0]),
             "label_rwr": float(labels.rwr[0]),
             "label_scores": {name: float(labels.score(name)[0]) for name in METRICS},

@@ -63,6 +63,7 @@ def write_dataset(directory: Path, n: int = N_DATA, per_shard: int = 32, *, nan_
         writer.write_shard(start // per_shard, {
             "depth_ims_tf_table": rng.uniform(0.55, 0.6, (k, 32, 32, 1)).astype(np.float32),
             "context_ims_tf_table": rng.uniform(0.55, 0.6, (k, 32, 32, 1)).astype(np.float32),
+            "object_context": rng.uniform(0.0, 0.1, (k, 6)).astype(np.float32),
             "hand_poses": np.column_stack([rng.uniform(0, 300, (k, 2)), rng.uniform(0.5, 0.6, k),
                                            rng.uniform(0, 0.6, k), np.zeros((k, 2)), np.ones(k)]).astype(np.float32),
             "robust_suction_wrench_resistance": metric[start:start + k],

@@ -55,6 +55,14 @@ def test_layout_shapes_dtypes_and_gqcnn_compatibility(reference):
     assert np.median(centre) < 0.005
     rwr = reader.field("robust_suction_wrench_resistance")
     assert np.all((rwr >= 0) & (rwr <= 1))
+    # The object context of the 14 x 7 x 7 cm tea box (object 0), lying on a 14 x 7 face whichever
+    # stable pose it is in: seen from above, its visible points span its footprint, 14 x 7 cm (a
+    # few mm less at the percentiles, a few more with the image's depth scale), and a grasp on it
+    # lies at most the half diagonal sqrt(7^2 + 3.5^2) = 7.8 cm from their centroid.
+    context_box = reader.field("object_context")[reader.field("object_labels") == 0]
+    assert len(context_box) and np.all(context_box[:, 0] <= 0.078 + 0.005)
+    assert np.all((context_box[:, 3] > 0.12) & (context_box[:, 3] < 0.15))
+    assert np.all((context_box[:, 4] > 0.06) & (context_box[:, 4] < 0.08))
     poses = reader.field("hand_poses")
     assert np.all((poses[:, 2] > 0.3) & (poses[:, 2] < 0.8))  # gripper depth: camera 0.5-0.7 m away
     assert np.all((poses[:, 3] >= 0) & (poses[:, 3] <= np.radians(80) + 1e-6))  # approach angle

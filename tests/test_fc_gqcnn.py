@@ -150,3 +150,35 @@ def test_dense_policy_refuses_a_model_it_cannot_convert():
 
     with pytest.raises(InputError, match="no network to convert"):
         make_policy("fc-gqcnn", model=Scores()).plan(observation, np.random.default_rng(0))
+
+
+def test_an_object_context_net_gets_each_grasps_context_from_both_policies():
+    # A context-pose net reads 8 pose values: the 2 of every net, then where the grasp lies on the
+    # object the cloud segments, in metres (object_context on the world-frame points). The dense
+    # map's q at a pixel is the network's on that pixel's windows with that pose; the CEM policy
+    # scores the same pose rows for the same pixels.
+    from suctionbench.learning.checkpoint import GQCNNModel
+    from suctionbench.learning.data import NormStats
+    from suctionbench.learning.models import build_model
+    from suctionbench.sensing.object_context import object_context
+    from suctionbench.sensing.thumbnails import THUMBNAIL_CONTEXT, extract_context_thumbnails
+
+    stats = NormStats((0.57, 0.59), (0.02, 0.01), (0.57, 0.2, 0.05, 0, 0, 0.1, 0.05, 0.05),
+                      (0.02, 0.1, 0.03, 0.02, 0.02, 0.05, 0.02, 0.02), count=1)
+    model = GQCNNModel(build_model("context-pose", torch.Generator().manual_seed(4)), stats, {"arch": "context-pose"})
+    _, observation, dense, pick, turn, (grasp, context) = _dense_windows(
+        model, [THUMBNAIL_GQCNN, THUMBNAIL_CONTEXT], 30, 2)
+    cloud = scene_cloud(observation, make_policy("gqcnn", model=model).config.sampler)
+    pose = observation.camera_pose
+    world = cloud.object_points @ pose[:3, :3].T + pose[:3, 3]
+    expected = object_context(world, dense["points"][pick] @ pose[:3, :3].T + pose[:3, 3],
+                              dense["approaches"][pick] @ pose[:3, :3].T)
+    assert dense["poses"].shape[1] == 8 and expected[:, 0].std() > 1e-3  # the offsets differ across the box
+    np.testing.assert_allclose(dense["poses"][pick][:, 2:], expected, rtol=0, atol=1e-6)
+    pairs = np.stack([extract_thumbnails(observation.depth, grasp, turn),
+                      extract_context_thumbnails(observation.depth, context, turn)], axis=1)
+    np.testing.assert_allclose(dense["q"][pick], model.predict(pairs, dense["poses"][pick]), rtol=0, atol=1e-5)
+    cem = make_policy("gqcnn", model=model)
+    rows, cols = dense["pixels"][pick, 1].astype(int), dense["pixels"][pick, 0].astype(int)
+    scored = cem.score(observation, cloud, rows, cols)
+    np.testing.assert_allclose(scored["poses"], dense["poses"][pick], rtol=0, atol=1e-6)

@@ -108,7 +108,7 @@ def write_synthetic(directory, n: int = N_SYNTH, per_shard: int = 64, seed: int 
         k = len(metric[part])
         writer.write_shard(start // per_shard, {
             "depth_ims_tf_table": images[part, ..., None], "context_ims_tf_table": context[part, ..., None],
-            "hand_poses": poses[part],
+            "hand_poses": poses[part], "object_context": np.zeros((k, 6), np.float32),
             "robust_suction_wrench_resistance": metric[part], "object_labels": objects[part],
             "pose_labels": np.zeros(k, np.int32), "image_labels": np.arange(start, start + k, dtype=np.int32),
             "grasp_labels": np.zeros(k, np.int32), "seal_flags": np.ones(k, np.uint8),
@@ -521,6 +521,24 @@ def test_context_net_trains_saves_reloads_and_predicts(dataset, tmp_path):
     # resuming continues the two-channel run
     more = train(dataset, tmp_path, TrainConfig(arch="context", epochs=4, seed=1))
     assert more["resumed_from_epoch"] == 3 and more["epochs_trained_now"] == 1
+
+
+def test_object_context_net_reads_the_field_into_its_pose_stream(dataset, tmp_path):
+    # context-pose: the context net whose pose vector is 2 + 6 long, the dataset's object context
+    # appended in storage order; the model card and predict() ask for (N, 8).
+    metrics = train(dataset, tmp_path, TrainConfig(arch="context-pose", epochs=1, seed=1))
+    assert metrics["parameters"] == 70_898 + 6 * 16 and math.isfinite(metrics["val_ap"])
+    card = json.loads((tmp_path / CARD_NAME).read_text())
+    assert card["inputs"]["poses"].startswith("(N, 8)") and len(card["normalisation"]["pose_mean"]) == 8
+    model = load_model(tmp_path)
+    assert model.pose_dim == 8
+    data = SplitData(dataset, "image_wise", "train", image_channels=2, object_context=True)
+    batch = data.load_shard(data.shards[0])
+    assert batch.poses.shape[1] == 8 and not batch.poses[:, 2:].any()  # the fixture's zeros
+    q = model.predict(batch.images, batch.poses)
+    assert np.all((q >= 0) & (q <= 1))
+    with pytest.raises(InputError, match=r"expected \(\d+, 8\)"):
+        model.predict(batch.images, batch.poses[:, :2])
 
 
 def test_learning_rate_staircase(dataset, tmp_path):

@@ -35,6 +35,7 @@ def synthetic(n: int, seed: int = 0) -> dict[str, np.ndarray]:
     return {
         "depth_ims_tf_table": rng.uniform(0.5, 0.7, (n, 32, 32, 1)).astype(np.float32),
         "context_ims_tf_table": rng.uniform(0.5, 0.7, (n, 32, 32, 1)).astype(np.float32),
+        "object_context": rng.uniform(0.0, 0.1, (n, 6)).astype(np.float32),
         "hand_poses": rng.normal(size=(n, 7)).astype(np.float32),
         "robust_suction_wrench_resistance": rng.uniform(0, 1, n).astype(np.float32),
         "object_labels": np.sort(rng.integers(0, 25, n)).astype(np.int32),

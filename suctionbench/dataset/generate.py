@@ -32,6 +32,13 @@ from suctionbench.errors import InputError
 from suctionbench.io import atomic_path
 from suctionbench.sensing.noise import DepthNoiseConfig
 
+OBJECT_CLEARANCE = 1e-3
+"""The object context's object pixels: those whose point in the clean render lies more than this
+(m) above the table (exactly z = 0 there), i.e. the renderer's object mask, as the simulated
+observation's segmentation gives the policies. Their points come from the noisy image; a height
+threshold on the noisy image would not do (its per-image depth scale lifts the table by up to
+~1 cm)."""
+
 UNIT_FIELDS = tuple(FIELDS)
 """Per-datapoint arrays of a unit: exactly the fields of a shard (dataset.storage.FIELDS)."""
 
@@ -119,6 +126,7 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
     from suctionbench.objects.build import ObjectRecord
     from suctionbench.sensing.camera import CameraPoseConfig, resolve_camera, sample_camera_pose
     from suctionbench.sensing.noise import apply_depth_noise
+    from suctionbench.sensing.object_context import object_context
     from suctionbench.sensing.thumbnails import (
         extract_context_thumbnails,
         extract_thumbnails,
@@ -182,6 +190,9 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
             out["depth_ims_tf_table"].append(thumbs[..., None].astype(np.float32))
             context = extract_context_thumbnails(noisy, pixels[idx], angles[idx])
             out["context_ims_tf_table"].append(context[..., None].astype(np.float32))
+            mask = (noisy > 0) & ((intrinsics.deproject(depth) @ rot[2] + origin[2]) > OBJECT_CLEARANCE)
+            seen = intrinsics.deproject(noisy)[mask] @ rot.T + origin  # the object's points, world frame
+            out["object_context"].append(object_context(seen, p_world[idx], v_world[idx]))
             out["hand_poses"].append(np.column_stack([pixels[idx, 1], pixels[idx, 0], pose_vec, v_cam[idx]])
                                      .astype(np.float32))
             out["robust_suction_wrench_resistance"].append(lab.rwr[idx].astype(np.float32))

@@ -57,6 +57,7 @@ import numpy as np
 
 from suctionbench.errors import InputError
 from suctionbench.io import atomic_path, file_digest
+from suctionbench.sensing.object_context import OBJECT_CONTEXT_COLUMNS
 
 
 @dataclass(frozen=True)
@@ -92,6 +93,8 @@ FIELDS: dict[str, FieldSpec] = {
                                       "context thumbnail (m): 3x the crop around the grasp, block-averaged"),
     "hand_poses": FieldSpec(np.dtype(np.float32), (len(HAND_POSE_COLUMNS),), "pose vector: " +
                             ", ".join(HAND_POSE_COLUMNS)),
+    "object_context": FieldSpec(np.dtype(np.float32), (len(OBJECT_CONTEXT_COLUMNS),),
+                                "where the grasp lies on the visible object (m): " + ", ".join(OBJECT_CONTEXT_COLUMNS)),
     "robust_suction_wrench_resistance": FieldSpec(np.dtype(np.float32), (), "robust wrench resistance in [0, 1]"),
     "object_labels": FieldSpec(np.dtype(np.int32), (), "index into the card's object list"),
     "pose_labels": FieldSpec(np.dtype(np.int32), (), "stable pose id"),
@@ -102,7 +105,7 @@ FIELDS: dict[str, FieldSpec] = {
 }
 """Every field of a shard, in storage order. All are required in every shard `DatasetWriter` writes."""
 
-LATER_FIELDS = ("context_ims_tf_table",)
+LATER_FIELDS = ("context_ims_tf_table", "object_context")
 """Fields added after the first datasets were written. A shard written before one existed has no
 file for it and its manifest does not list it. Such a shard is intact, not damaged: `verify`
 accepts it and readers read its other fields; `shard` raises InputError naming the field only

@@ -62,6 +62,9 @@ class GQCNNModel:
         if stats.image_channels != self.image_channels:
             raise InputError(f"GQ-CNN model '{card.get('arch')}': the network reads {self.image_channels} image "
                              f"channel(s), the normalisation statistics are for {stats.image_channels}")
+        if len(stats.pose_mean) != self.pose_dim:
+            raise InputError(f"GQ-CNN model '{card.get('arch')}': the network reads poses of {self.pose_dim} "
+                             f"values, the normalisation statistics are for {len(stats.pose_mean)}")
         self.stats = stats
         self.card = card
         self.device = torch.device(device)
@@ -75,9 +78,15 @@ class GQCNNModel:
         """Image channels the network reads (1: grasp thumbnail; 2: grasp and context thumbnail)."""
         return int(getattr(self.network, "image_channels", 1))
 
+    @property
+    def pose_dim(self) -> int:
+        """Length of the pose vector the network reads: 2, or 8 with the object context."""
+        return int(getattr(self.network, "pose_dim", 2))
+
     def predict(self, images: np.ndarray, poses: np.ndarray, batch_size: int = PREDICT_BATCH) -> np.ndarray:
         """Success probability q (N,) float64 for thumbnails float32 metres and poses (N, 2) =
-        [gripper depth (m), approach angle (rad)]; batched, without gradients.
+        [gripper depth (m), approach angle (rad)] (N, 8 with the object context: `pose_dim`);
+        batched, without gradients.
 
         Thumbnails: (N, C, 32, 32) with C = `image_channels` (channel 0 the grasp thumbnail, 1 the
         context thumbnail); a one-channel model also takes (N, 32, 32) and (N, 32, 32, 1).
@@ -93,8 +102,9 @@ class GQCNNModel:
             want = f"(N, {size}, {size})" if channels == 1 else f"(N, {channels}, {size}, {size})"
             raise InputError(f"images: shape {given.shape}, expected {want} for architecture "
                              f"'{self.card.get('arch')}'")
-        if poses.shape != (len(images), 2):
-            raise InputError(f"poses: shape {poses.shape}, expected ({len(images)}, 2) to match the images")
+        if poses.shape != (len(images), self.pose_dim):
+            raise InputError(f"poses: shape {poses.shape}, expected ({len(images)}, {self.pose_dim}) to match the "
+                             "images")
         for name, arr in (("images", images), ("poses", poses)):
             if arr.dtype.kind not in "fiu" or not np.isfinite(arr).all():
                 raise InputError(f"{name}: must be finite numbers (dtype {arr.dtype})")

@@ -109,6 +109,10 @@ IMAGE_FIELDS = (IMAGE_FIELD, CONTEXT_FIELD)
 POSE_FIELD = "hand_poses"
 """Dataset field with the pose vectors (n, 7); `POSE_COLUMNS` are the network's input."""
 
+OBJECT_CONTEXT_FIELD = "object_context"
+"""Dataset field with the object context (n, 6), metres: appended to the pose vector of the nets
+that read it (`suctionbench.learning.models.pose_dim_of`)."""
+
 METRIC_FIELD = "robust_suction_wrench_resistance"
 """Dataset field thresholded into the label."""
 
@@ -126,7 +130,8 @@ so normalisation only centres that input instead of dividing by ~0."""
 @dataclass(frozen=True)
 class Batch:
     """A batch as stored: images (B, C, 32, 32) float32 metres (channel 0 the grasp thumbnail, 1 the
-    context thumbnail if read), poses (B, 2) float32 unsigned, metric (B,)."""
+    context thumbnail if read), poses (B, 2) float32 unsigned (B, 8 with the object context),
+    metric (B,)."""
 
     images: np.ndarray
     poses: np.ndarray
@@ -169,10 +174,11 @@ class NormStats:
     image_std: float | tuple[float, ...]
     """Standard deviation (m) of those pixels, per image channel."""
 
-    pose_mean: tuple[float, float]
-    """Mean of [gripper depth (m), approach angle (rad)] over the training datapoints."""
+    pose_mean: tuple[float, ...]
+    """Mean of [gripper depth (m), approach angle (rad)] over the training datapoints, then of each
+    object-context feature for the nets that read it."""
 
-    pose_std: tuple[float, float]
+    pose_std: tuple[float, ...]
     """Standard deviation of each pose dimension (1 where the input is constant, see `MIN_STD`)."""
 
     count: int = 0
@@ -212,7 +218,8 @@ class NormStats:
             raise InputError(f"{source}: malformed normalisation statistics ({exc!r})") from None
         image_mean, image_std = np.atleast_1d(stats.image_mean).tolist(), np.atleast_1d(stats.image_std).tolist()
         values = [*image_mean, *image_std, *stats.pose_mean, *stats.pose_std]
-        if len(stats.pose_mean) != 2 or len(stats.pose_std) != 2 or not all(map(math.isfinite, values)) \
+        if len(stats.pose_mean) < 2 or len(stats.pose_std) != len(stats.pose_mean) \
+                or not all(map(math.isfinite, values)) \
                 or min(*image_std, *stats.pose_std) <= 0:
             raise InputError(f"{source}: normalisation statistics must be finite with positive stds, got {data}")
         return stats
@@ -227,7 +234,7 @@ class NormStats:
         return (images - image_mean) / image_std, self.normalise_poses(poses)
 
     def normalise_poses(self, poses: torch.Tensor) -> torch.Tensor:
-        """The pose stream's input from poses (B, 2): each dimension standardised."""
+        """The pose stream's input from poses (B, P): each dimension standardised."""
         mean = torch.tensor(self.pose_mean, dtype=poses.dtype, device=poses.device)
         std = torch.tensor(self.pose_std, dtype=poses.dtype, device=poses.device)
         return (poses - mean) / std
@@ -302,7 +309,7 @@ def augment(images: torch.Tensor, poses: torch.Tensor, generator: torch.Generato
     if config.symmetrize:
         flips = torch.rand(2, len(images), generator=generator, device=generator.device) < 0.5
         images, angles = symmetrize(images, poses[:, 1], flips[0], flips[1])
-        poses = torch.stack([poses[:, 0], angles], dim=1)
+        poses = torch.cat([poses[:, :1], angles[:, None], poses[:, 2:]], dim=1)  # the object context: mirror-free
     return images, poses
 
 
@@ -403,12 +410,13 @@ class SplitData:
 
     def __init__(self, directory: str | Path, kind: str, part: str, *, max_datapoints: int | None = None,
                  subset_rng: np.random.Generator | None = None, reader: DatasetReader | None = None,
-                 image_channels: int = 1):
+                 image_channels: int = 1, object_context: bool = False):
         if image_channels not in (1, 2):
             raise InputError(f"image_channels {image_channels!r}: must be 1 (grasp thumbnail) or 2 (grasp, context)")
         self.reader = reader or DatasetReader(directory)
         self.kind, self.part = kind, part
         self.image_fields = IMAGE_FIELDS[:image_channels]
+        self.object_context = bool(object_context)
         indices = np.unique(read_split(directory, kind, part))
         if max_datapoints is not None and len(indices) > max_datapoints:
             rng = subset_rng or np.random.default_rng(0)
@@ -427,11 +435,11 @@ class SplitData:
                                  f"shard {shard}, which is missing or smaller (dataset incomplete?)")
             self._local[shard] = local.astype(np.int64)
         self.num_datapoints = int(len(indices))
-        for name in self.image_fields:
+        for name in [*self.image_fields, *([OBJECT_CONTEXT_FIELD] if self.object_context else [])]:
             if not self.reader.has_field(name, self.shards):
                 raise InputError(f"dataset '{self.reader.directory}': has no field '{name}' (written before "
                                  "suctionbench stored it); this network reads it: regenerate the dataset, or "
-                                 "train a one-channel architecture (dn3, compact)")
+                                 "train an architecture that does not read it (dn3, compact)")
 
     @property
     def shards(self) -> list[int]:
@@ -456,10 +464,14 @@ class SplitData:
 
     def load_shard(self, shard: int) -> Batch:
         """The split's datapoints of one shard, in index order; images (n, C, 32, 32)."""
-        arrays = self.reader.shard(shard, fields=[*self.image_fields, POSE_FIELD, METRIC_FIELD])
+        extra = [OBJECT_CONTEXT_FIELD] if self.object_context else []
+        arrays = self.reader.shard(shard, fields=[*self.image_fields, POSE_FIELD, *extra, METRIC_FIELD])
         local = self._local[shard]
         images = np.stack([arrays[name][local, ..., 0] for name in self.image_fields], axis=1)
-        return Batch(images, arrays[POSE_FIELD][local][:, list(POSE_COLUMNS)], arrays[METRIC_FIELD][local])
+        poses = arrays[POSE_FIELD][local][:, list(POSE_COLUMNS)]
+        if self.object_context:
+            poses = np.concatenate([poses, arrays[OBJECT_CONTEXT_FIELD][local]], axis=1)
+        return Batch(images, poses, arrays[METRIC_FIELD][local])
 
     def _pools(self, shards: list[int], pool_size: int) -> Iterator[Batch]:
         groups = [shards[i:i + pool_size] for i in range(0, len(shards), pool_size)]

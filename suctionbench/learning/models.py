@@ -68,6 +68,15 @@ thumbnail so training-time flips apply to both channels alike. Inputs: images (B
 (grasp, context). context: 2 x 30,720 (image streams) + 48 (pose) + 9,280 (merge: (2 x 64 + 16)
 x 64 + 64) + 130 = 70,898 parameters, 1.8 M multiply-accumulates per grasp; context-wide, twice
 the filters and fc widths: 281,058 parameters, 6.0 M multiply-accumulates.
+
+context-pose: the object context in metres
+------------------------------------------
+The context net with a pose vector of 2 + 6: gripper depth, approach angle, and the object context
+(`suctionbench.sensing.object_context`: the grasp's horizontal offset from the visible object's
+centroid, that offset along the approach's lean, the grasp's rise above the centroid, the visible
+object's length, width and top), read from the dataset field ``object_context``. Distances the
+context thumbnail shows only in pixels of depth-dependent size, and a long object's centre that
+it may not show at all. 70,994 parameters (pc1: 8 x 16 + 16).
 """
 
 from __future__ import annotations
@@ -86,6 +95,10 @@ IMAGE_SIZE = 32
 
 POSE_DIM = 2
 """Length of the pose vector: [gripper depth, approach angle]."""
+
+OBJECT_CONTEXT_DIM = 6
+"""Length of the object context the `context-pose` net appends to its pose vector
+(`suctionbench.sensing.object_context`: where the grasp lies on the visible object, in metres)."""
 
 LRN_RADIUS = 2
 """gqcnn's LRN ``depth_radius`` r (channels each side of the centre channel)."""
@@ -146,18 +159,19 @@ class GQCNN(nn.Module):
     """
 
     def __init__(self, convs: Sequence[tuple[str, int, int, bool, bool]], padding: str, image_fc: int, pose_fc: int,
-                 merge_fc: int, context: bool = False):
+                 merge_fc: int, context: bool = False, object_context: bool = False):
         super().__init__()
         # gqcnn's layer names (conv*, fc3, pc1, fc4, fc5) name the tensors of a saved model.
         self.image_stream = _image_stream(convs, padding, image_fc)
         self.context_stream = _image_stream(convs, padding, image_fc) if context else None
         self.image_channels = 2 if context else 1
-        self.pose_stream = nn.Sequential(OrderedDict(pc1=nn.Linear(POSE_DIM, pose_fc), relu=nn.ReLU()))
+        self.pose_dim = POSE_DIM + (OBJECT_CONTEXT_DIM if object_context else 0)
+        self.pose_stream = nn.Sequential(OrderedDict(pc1=nn.Linear(self.pose_dim, pose_fc), relu=nn.ReLU()))
         self.merge = nn.Sequential(OrderedDict(fc4=nn.Linear(self.image_channels * image_fc + pose_fc, merge_fc),
                                                relu=nn.ReLU(), fc5=nn.Linear(merge_fc, 2)))
 
     def forward(self, images: torch.Tensor, poses: torch.Tensor) -> torch.Tensor:
-        """Logits (B, 2) for normalised images (B, image_channels, 32, 32) and poses (B, 2)."""
+        """Logits (B, 2) for normalised images (B, image_channels, 32, 32) and poses (B, pose_dim)."""
         features = [self.image_stream(images[:, :1])]
         if self.context_stream is not None:
             features.append(self.context_stream(images[:, 1:2]))
@@ -182,6 +196,8 @@ _SPECS: dict[str, dict] = {
     "context": _compact_layout(16, context=True),
     # the same with twice the filters and fc widths: the capacity step of the size sweep
     "context-wide": _compact_layout(32, context=True),
+    # context, and the object context in metres in the pose stream (module doc, "context-pose")
+    "context-pose": _compact_layout(16, context=True, object_context=True),
 }
 
 ARCHITECTURES = tuple(_SPECS)
@@ -197,6 +213,14 @@ def image_channels_of(arch: str) -> int:
     if arch not in _SPECS:
         raise InputError(f"architecture '{arch}': unknown (known: {', '.join(ARCHITECTURES)})")
     return 2 if _SPECS[arch].get("context") else 1
+
+
+def pose_dim_of(arch: str) -> int:
+    """Length of the pose vector network `arch` reads: POSE_DIM, plus OBJECT_CONTEXT_DIM for the nets
+    with the object context; InputError for an unknown name."""
+    if arch not in _SPECS:
+        raise InputError(f"architecture '{arch}': unknown (known: {', '.join(ARCHITECTURES)})")
+    return POSE_DIM + (OBJECT_CONTEXT_DIM if _SPECS[arch].get("object_context") else 0)
 
 
 def init_weights(model: nn.Module, generator: torch.Generator | None = None) -> None:
@@ -268,7 +292,7 @@ def _dummy_forward(model: GQCNN, modules: list[nn.Module], hook) -> None:
         with torch.no_grad():
             param = next(model.parameters())
             model(torch.zeros(1, model.image_channels, IMAGE_SIZE, IMAGE_SIZE, device=param.device),
-                  torch.zeros(1, POSE_DIM, device=param.device))
+                  torch.zeros(1, model.pose_dim, device=param.device))
     finally:
         for handle in handles:
             handle.remove()

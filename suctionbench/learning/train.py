@@ -77,12 +77,15 @@ from suctionbench.learning.data import (
 from suctionbench.learning.metrics import average_precision, plot_precision_recall, precision_recall_curve
 from suctionbench.learning.models import (
     ARCHITECTURES,
+    POSE_DIM,
     activation_bytes,
     build_model,
     count_macs,
     count_parameters,
     image_channels_of,
+    pose_dim_of,
 )
+from suctionbench.sensing.object_context import OBJECT_CONTEXT_COLUMNS
 
 PR_CURVE_NAME = "precision_recall.png"
 
@@ -460,10 +463,11 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
     threshold = config.label_threshold if config.label_threshold is not None else label_threshold(card)
     seq_subset, seq_shuffle, seq_init, seq_augment, seq_fit, seq_val = np.random.SeedSequence(config.seed).spawn(6)
     channels = image_channels_of(config.arch)  # which image fields the network reads
+    reads = {"image_channels": channels, "object_context": pose_dim_of(config.arch) > POSE_DIM}
     train_data = SplitData(dataset_dir, config.split, "train", max_datapoints=config.max_train_datapoints,
-                           subset_rng=np.random.default_rng(seq_subset), reader=reader, image_channels=channels)
+                           subset_rng=np.random.default_rng(seq_subset), reader=reader, **reads)
     val_data = SplitData(dataset_dir, config.split, "val", max_datapoints=config.max_val_datapoints,
-                         subset_rng=np.random.default_rng(seq_val), reader=reader, image_channels=channels)
+                         subset_rng=np.random.default_rng(seq_val), reader=reader, **reads)
     if train_data.num_datapoints == 0:
         raise InputError(f"dataset '{dataset_dir}': split {config.split} has no training datapoints")
     fit_data = train_data.subset(config.fit_datapoints, np.random.default_rng(seq_fit))
@@ -510,7 +514,10 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
         "arch": config.arch, "parameters": count_parameters(network),
         "macs_per_grasp": count_macs(network),
         "inputs": {"images": images_input,
-                   "poses": "(N, 2) [gripper depth (m), approach angle to the table normal (rad, >= 0)]"},
+                   "poses": "(N, 2) [gripper depth (m), approach angle to the table normal (rad, >= 0)]"
+                            if not reads["object_context"] else
+                            "(N, 8) [gripper depth (m), approach angle to the table normal (rad, >= 0), then the "
+                            "object context in metres: " + ", ".join(OBJECT_CONTEXT_COLUMNS) + "]"},
         "output": "probability that the grasp succeeds: softmax of the logits, column 1",
         "label": {"metric": METRIC_FIELD, "threshold": threshold, "positive": "metric > threshold"},
         "dataset": _dataset_summary(dataset_dir, card, config.split, train_data, val_data),

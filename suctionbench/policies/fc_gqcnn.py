@@ -44,13 +44,12 @@ from scipy import ndimage
 
 from suctionbench.errors import InputError
 from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, scene_cloud
-from suctionbench.policies.gqcnn import CEMConfig, GQCNNPolicy, LazyModel, resolve_model
+from suctionbench.policies.gqcnn import CEMConfig, GQCNNPolicy, LazyModel, network_poses, resolve_model
 from suctionbench.sensing.thumbnails import (
     THUMBNAIL_CONTEXT,
     THUMBNAIL_GQCNN,
     ThumbnailConfig,
     context_image,
-    pose_vector,
     project_grasps,
     thumbnail_axes,
 )
@@ -146,7 +145,7 @@ class FCGQCNNPolicy:
         rows, cols = np.nonzero(cloud.valid)
         pixels, points, approaches = cloud.grasps_at(rows, cols)
         _, depths, angles = project_grasps(points, approaches, cloud.intrinsics)
-        poses = pose_vector(depths, approaches, cloud.table_normal)
+        poses = network_poses(model, observation, cloud, depths, points, approaches, cfg.sampler.table_height)
         step = 2.0 * math.pi / cfg.rotations
         bins = np.mod(np.rint(angles / step).astype(np.intp), cfg.rotations)
         used = np.unique(bins)

@@ -38,7 +38,7 @@ the first parameters, then EM runs to scikit-learn's defaults (100 iterations, t
 the mean log-likelihood). Every random draw comes from the generator passed to `plan`, so planning
 is deterministic.
 
-The network is anything with `predict(images (N, 32, 32) float32 metres, poses (N, 2) float32)
+The network is anything with `predict(images (N, 32, 32) float32 metres, poses (N, P) float32)
 -> (N,) probabilities` (duck typing), or, if its `image_channels` attribute is 2, with images
 (N, 2, 32, 32) = (grasp, context); `make_policy("gqcnn")` loads one with
 `suctionbench.learning.checkpoint.load_model`, from the shipped default model unless a model or a
@@ -59,6 +59,7 @@ import numpy as np
 from suctionbench.errors import InputError
 from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, SceneCloud, scene_cloud
 from suctionbench.resources import asset_path
+from suctionbench.sensing.object_context import object_context
 from suctionbench.sensing.thumbnails import (
     THUMBNAIL_CONTEXT,
     THUMBNAIL_GQCNN,
@@ -88,6 +89,26 @@ class GraspQualityModel(Protocol):
 def image_channels(model: Any) -> int:
     """Image channels `model` reads: its ``image_channels`` attribute, 1 if it has none."""
     return int(getattr(model, "image_channels", 1))
+
+
+def pose_dim(model: Any) -> int:
+    """Length of the pose vector `model` reads: its ``pose_dim`` attribute, 2 if it has none (8: the
+    pose vector and the object context, `suctionbench.sensing.object_context`)."""
+    return int(getattr(model, "pose_dim", 2))
+
+
+def network_poses(model: Any, observation: Observation, cloud: SceneCloud, depths: np.ndarray, points: np.ndarray,
+                  approaches: np.ndarray, table_height: float) -> np.ndarray:
+    """The pose vectors (N, 2) of grasps at camera-frame `points` along `approaches` at gripper
+    `depths`, and, for a model that reads it, the object context (N, 6) of each, appended: where
+    it lies on the object the cloud segments, in metres (world frame, the table at `table_height`)."""
+    poses = pose_vector(depths, approaches, cloud.table_normal)
+    if pose_dim(model) == 2:
+        return poses
+    rotation, origin = observation.camera_pose[:3, :3], observation.camera_pose[:3, 3]
+    context = object_context(cloud.object_points @ rotation.T + origin, points @ rotation.T + origin,
+                             approaches @ rotation.T, table_height)
+    return np.concatenate([poses, context], axis=1)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -286,6 +307,11 @@ class LazyModel:
         """The loaded model's image channels (loads it)."""
         return image_channels(self.load())
 
+    @property
+    def pose_dim(self) -> int:
+        """The loaded model's pose vector length (loads it)."""
+        return pose_dim(self.load())
+
     def __repr__(self) -> str:
         return f"LazyModel('{self.path}')"
 
@@ -299,7 +325,7 @@ class GQCNNPolicy:
     """Cross-entropy-method suction policy scored by a GQ-CNN (see the module docstring).
 
     The returned grasp's candidates hold every scored grasp: `pixels`, `points`, `approaches`, `q`,
-    `poses` (N, 2) pose vectors and `iteration` (N,) (0 for the seeds, then 1..num_iters). `info`
+    `poses` (N, P) pose vectors (`network_poses`) and `iteration` (N,) (0 for the seeds, then 1..num_iters). `info`
     has `plan_time`, `relaxed`, `evaluations`, `round_best_q` (best q of each round) and `chosen`.
     """
 
@@ -332,7 +358,8 @@ class GQCNNPolicy:
                 context = context_image(observation.depth, self.config.context_thumbnail)
             wide = extract_thumbnails(context, pixels, angles, self.config.context_thumbnail)
             thumbnails = np.stack([thumbnails, wide], axis=1)
-        poses = pose_vector(depths, approaches, cloud.table_normal)
+        poses = network_poses(self.model, observation, cloud, depths, points, approaches,
+                              self.config.sampler.table_height)
         q = np.asarray(self.model.predict(thumbnails, poses), dtype=float).reshape(-1)
         if q.shape != (len(rows),):
             raise RuntimeError(f"GQ-CNN model returned {q.shape} qualities for {len(rows)} grasps")

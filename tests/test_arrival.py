@@ -170,3 +170,40 @@ def test_labeller_motion_is_the_episodes():
     assert labels.lift_height == episode.lift_height
     assert labels.lift_time == pytest.approx(episode.lift_height / episode.lift_speed)
     assert labels.lift_acceleration == pytest.approx(10 / math.sqrt(3) * 0.15, rel=1e-12)
+
+
+def test_lip_wrench_at_the_bars_turning_point_is_newton_euler_with_its_inertia():
+    # The bar of the lift-off test, at its first turning point phi_p (at rest, turning back): the
+    # lip holds it against its weight f and turns it back with the angular acceleration alpha the
+    # unbalanced moment gives its whole inertia about the tilt axis n through the lip centre,
+    # I_n = n.I_c n + m |n x r|^2 = m (L^2 + 1e-4) / 12 + m |n x r|^2 (parallel axes), not the
+    # centre of mass's share alone. From the object's side (Newton, Euler about the lip centre):
+    # lip force F = f' - m alpha (n x r), moment M = r x f' - m alpha r x (n x r) - alpha I_c n, with
+    # f' the load in the tilted frame and alpha I_n = n.(r x f') - R(phi_p).
+    from suctionbench.contact.wrench import _arrived_tilt, lip_load
+
+    cup = dataclasses.replace(CUP_DEFAULT, bellows_loss_factor=0.0)
+    m, length, d = 0.1, 0.2, 0.04
+    ring = np.array([[d, 0.0, 0.005]])
+    com = np.zeros((1, 3))
+    frame = np.diag([1.0, -1.0, -1.0])[None]
+    weight = np.array([[0.0, 0.0, -m * G]])
+    arrival = _bar_arrival(m, length, weight)
+    swing = _Swing(weight, com, ring, frame, cup)
+    phi = _arrived_tilt(swing, swing.static_tilt(), arrival, com, ring, frame, cup)
+    n, r = swing.n[0], swing.r[0]
+    f = swing.turned(phi)[0]
+    inertia_c = frame[0].T @ arrival.inertia @ frame[0]  # the bar's, in the contact frame
+    i_n = n @ inertia_c @ n + m * np.cross(n, r) @ np.cross(n, r)
+    assert n @ inertia_c @ n == pytest.approx(m * (length**2 + 1e-4) / 12, rel=1e-9)  # n is the bar's y axis
+    alpha = (float(swing.moment(phi)[0])) / i_n
+    assert alpha < 0  # beyond its equilibrium: the cup turns it back
+    want_force = f - m * alpha * np.cross(n, r)
+    want_moment = np.cross(r, f) - m * alpha * np.cross(r, np.cross(n, r)) - alpha * inertia_c @ n
+    wrench = lip_load(weight, com, ring, frame, cup, arrival)[0]
+    np.testing.assert_allclose(wrench[:3], want_force, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(wrench[3:], want_moment, rtol=1e-9, atol=1e-12)
+    assert n @ wrench[3:] == pytest.approx(float(swing.returned(phi)[0]), rel=1e-9)  # what the cup returns
+    # The point-mass bound (no inertia known) turns it back harder: a larger lip force.
+    bound = m * float(swing.moment(phi)[0]) / (m * np.cross(n, r) @ np.cross(n, r))
+    assert abs(bound) > abs(m * alpha)

@@ -270,17 +270,18 @@ def lip_load(
     The silicone's loss leaves a share D = exp(-pi zeta / sqrt(1 - zeta^2)) of the overshoot,
     zeta = eta / 2 (`CupConfig.swing_overshoot_fraction`): phi_p = phi_s + D (phi_u - phi_s). At
     phi_p the object is momentarily at rest, so the lip carries the cup's return R(phi_p) about n,
-    and what turns the object back: Newton about the lip centre, I alpha = M_n - R(phi_p) with
-    I >= m |n x r|^2 (all the mass at the centre of mass: the largest angular acceleration any
-    mass distribution can have). For that point mass the centre of mass accelerates by alpha (n x r)
-    and its angular momentum changes by m alpha r x (n x r), so the lip carries (Newton and Euler,
-    the mass at rest)
+    and what turns the object back: Newton about the lip centre, I_n alpha = M_n - R(phi_p),
+    M_n = A cos(phi_p) - B sin(phi_p). The centre of mass accelerates by alpha (n x r) and the
+    object's angular momentum about the lip centre changes by m alpha r x (n x r) + alpha I_c n,
+    so the lip carries (Newton and Euler, the object at rest)
 
         force:  f(phi_p) - m alpha (n x r)
-        moment: r x f(phi_p) - m alpha r x (n x r),   m alpha = (M_n - R(phi_p)) / |n x r|^2,
+        moment: r x f(phi_p) - m alpha r x (n x r) - alpha I_c n,
 
-    M_n = A cos(phi_p) - B sin(phi_p); the moment's part along n is R(phi_p). At phi_s both reduce
-    to the static swing.
+    whose part along n is R(phi_p); at phi_s both reduce to the static swing. With the pick's
+    arrivals the object's inertia is known (`Arrival.inertia`, about its centre of mass, I_c):
+    I_n = n . I_c n + m |n x r|^2 (parallel axes). Without (the bound), all the mass at the centre
+    of mass: I_c = 0, the largest angular acceleration any mass distribution can have.
 
     The stop's catch. A swing that reaches the bellows' stop with speed left is caught by the
     squeezed wall and the lip (`_Swing`: R rises at 0.14 N m/rad instead of the swing's 0.028):
@@ -306,8 +307,14 @@ def lip_load(
     unbalanced = np.where(swing.tips, np.minimum(swing.moment(phi_p), 0.0), 0.0)
     arm = np.cross(swing.n, swing.r)
     arm2 = np.einsum("ni,ni->n", arm, arm)
-    spin = np.where(arm2 > 1e-12, unbalanced / np.maximum(arm2, 1e-12), 0.0)[:, None]  # m alpha
-    return np.concatenate([f - spin * arm, torque - spin * np.cross(swing.r, arm)], axis=1)
+    if arrival is None:  # a point mass (docstring): m alpha = (M_n - R) / |n x r|^2
+        spin = np.where(arm2 > 1e-12, unbalanced / np.maximum(arm2, 1e-12), 0.0)[:, None]
+        return np.concatenate([f - spin * arm, torque - spin * np.cross(swing.r, arm)], axis=1)
+    own = np.einsum("nji,jk,nkl,nl->ni", frames, arrival.inertia, frames, swing.n)  # I_c n, contact frame
+    inertia = np.einsum("ni,ni->n", swing.n, own) + arrival.mass * arm2
+    alpha = np.where(inertia > 1e-15, unbalanced / np.maximum(inertia, 1e-15), 0.0)[:, None]
+    spin = arrival.mass * alpha  # m alpha
+    return np.concatenate([f - spin * arm, torque - spin * np.cross(swing.r, arm) - alpha * own], axis=1)
 
 
 def _turning_tilt(energy, phi_s: np.ndarray) -> np.ndarray:

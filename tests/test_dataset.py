@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from suctionbench.config import STANDARD_GRAVITY
+from suctionbench.config import CUP_DEFAULT, STANDARD_GRAVITY
 from suctionbench.contact import SuctionLabeller
 from suctionbench.dataset import generate as gen
 from suctionbench.dataset.storage import DatasetReader, dexnet_compatible, read_card, read_split
@@ -69,6 +69,9 @@ def test_layout_shapes_dtypes_and_gqcnn_compatibility(reference):
     assert dexnet_compatible(reference) == []
     card = read_card(reference)
     assert card["status"] == "complete" and card["camera"]["name"] == "primesense" and card["objects"] == KEYS
+    # labelled with the loads the benchmark scores a pick by (LabelConfig.for_episode)
+    motion = card["config"]["label"]["perturbation"]
+    assert motion["inertial_acceleration"] == CUP_DEFAULT.peak_acceleration and motion["press_compression"] > 0
     train, val = read_split(reference, "image_wise", "train"), read_split(reference, "image_wise", "val")
     assert len(set(train) & set(val)) == 0 and len(train) + len(val) == CONFIG.datapoints
 

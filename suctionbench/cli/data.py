@@ -19,7 +19,20 @@ from suctionbench.cli.common import (
     resolve_workers,
     run_command,
 )
+from suctionbench.errors import InputError
 from suctionbench.validate import BYTES_PER_DATAPOINT, label_memory, output_dir, require_disk, require_memory
+
+LOADS = ("episode", "static")
+"""What `generate --load` accepts."""
+
+
+def label_config(cup: Any, load: str) -> Any:
+    """The labels' configuration for `generate --load`: the episode's loads or the paper's static one."""
+    from suctionbench.config import LabelConfig
+
+    if load not in LOADS:
+        raise InputError(f"--load '{load}': unknown (known: {', '.join(LOADS)})")
+    return LabelConfig.for_episode(cup) if load == "episode" else LabelConfig(cup=cup)
 
 
 @app.command()
@@ -33,6 +46,9 @@ def generate(
     address: Annotated[str | None, typer.Option(help="Ray cluster address (engine ray).")] = None,
     grasps_per_object: Annotated[int, typer.Option(help="Grasp candidates per object.")] = 200,
     cup: Annotated[str, typer.Option(help="Cup preset: default or paper.")] = "default",
+    load: Annotated[str, typer.Option(help="Loads the labels test: episode (the pick's inertial load, its "
+                                           "arrivals and the touch-down's press: what the benchmark scores) or "
+                                           "static (the paper's quasi-static gravity).")] = "episode",
     resume: Annotated[bool, typer.Option(help="Continue an interrupted run with the same configuration.")] = False,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing dataset.")] = False,
     seed: SeedOpt = 0,
@@ -45,6 +61,7 @@ def generate(
         from suctionbench.dataset.generate import GenerationConfig, generate_dataset
         from suctionbench.objects.registry import resolve_objects
 
+        label = label_config(cup_preset(cup), load)
         output_dir(out, "--out")
         require_disk(out, datapoints * BYTES_PER_DATAPOINT, f"--datapoints {datapoints}")
         require_memory(label_memory(grasps_per_object, LabelConfig().perturbation.num_samples)
@@ -52,7 +69,7 @@ def generate(
         records = resolve_objects(objects)
         config = GenerationConfig(
             datapoints=datapoints, seed=seed, grasps_per_object=grasps_per_object,
-            label=LabelConfig(cup=cup_preset(cup)),
+            label=label,
         )
         start = time.perf_counter()
         with progress_bar(datapoints, "generating", not as_json) as advance:

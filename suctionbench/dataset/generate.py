@@ -91,8 +91,11 @@ class GenerationConfig:
     noise: DepthNoiseConfig = field(default_factory=DepthNoiseConfig)
     """Depth-image noise model."""
 
-    label: LabelConfig = field(default_factory=LabelConfig)
-    """Cup, seal, perturbation and metric configuration of the labels."""
+    label: LabelConfig = field(default_factory=LabelConfig.for_episode)
+    """Cup, seal, perturbation and metric configuration of the labels. By default the labels the
+    benchmark scores a pick by (`LabelConfig.for_episode`: the pick's inertial load, its arrivals
+    and the touch-down's press), so a network learns the verdict it is judged by; the paper's
+    quasi-static model is `LabelConfig(cup=...)` (``generate --load static``)."""
 
 
 @dataclass(frozen=True)

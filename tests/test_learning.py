@@ -41,7 +41,7 @@ from suctionbench.learning.models import (
     count_parameters,
     tf_lrn_to_torch,
 )
-from suctionbench.learning.train import TrainConfig, train
+from suctionbench.learning.train import TrainConfig, _loss, train
 from suctionbench.sensing.noise import DepthNoiseConfig
 from suctionbench.sensing.thumbnails import ThumbnailConfig, extract_context_thumbnails, extract_thumbnails
 
@@ -460,6 +460,42 @@ def test_compact_overfits_the_synthetic_set(dataset, tmp_path):
     assert card["dataset"]["camera"]["name"] == "primesense" and card["dataset"]["cup"]["name"] == "default"
     assert card["label"]["threshold"] == 0.2 and card["versions"]["torch"] == torch.__version__
     assert (tmp_path / "precision_recall.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_soft_target_is_the_cross_entropy_against_the_metric():
+    # With targets in {0, 1} the soft loss is the binary one. For a metric m in (0, 1) the loss
+    # -(m log q + (1 - m) log(1 - q)) has its minimum at q = m (its derivative in the logit is q - m),
+    # so its gradient vanishes where the softmax equals the metric, and nowhere else.
+    logits = torch.tensor([[0.3, -1.2], [2.0, 0.5], [-0.4, 0.9]])
+    hard = np.array([0.0, 1.0, 1.0])
+    assert torch.allclose(_loss(logits, hard, torch.tensor([0, 1, 1]), "soft"),
+                          _loss(logits, hard, torch.tensor([0, 1, 1]), "binary"))
+    metric = np.array([0.25, 0.9, 0.6])
+    at_metric = torch.log(torch.tensor(np.column_stack([1 - metric, metric]), dtype=torch.float32)).requires_grad_()
+    _loss(at_metric, metric, torch.tensor([1, 1, 1]), "soft").backward()
+    assert float(at_metric.grad.abs().max()) < 1e-6
+    shifted = (at_metric.detach() + torch.tensor([0.0, 0.5])).requires_grad_()
+    _loss(shifted, metric, torch.tensor([1, 1, 1]), "soft").backward()
+    assert float(shifted.grad.abs().min()) > 1e-3
+
+
+def test_soft_target_learns_the_expected_metric(dataset, tmp_path):
+    # The synthetic positives' metric is U(0.5, 1) whatever the image (synthetic_thumbnails), so the
+    # best a net can say of an unseen positive is the conditional mean, 0.75: the minimiser of the
+    # expected soft cross-entropy E[-(m log q + (1 - m) log(1 - q))] is q = E[m]. A binary target
+    # would drive the same q towards 1.
+    metrics = train(dataset, tmp_path, TrainConfig(epochs=20, target="soft", **FAST))
+    assert metrics["val_ap"] > 0.9  # scored against the binary label, as the binary target's run
+    val = SplitData(dataset, "image_wise", "val")
+    parts = [val.load_shard(s) for s in val.shards]
+    images, poses, metric = (np.concatenate([getattr(p, k) for p in parts]) for k in ("images", "poses", "metric"))
+    q = load_model(tmp_path).predict(images, poses)
+    positive = metric > 0.2
+    assert abs(float(q[positive].mean()) - 0.75) < 0.1 and float(q[~positive].mean()) < 0.2
+    card = json.loads((tmp_path / CARD_NAME).read_text())
+    assert card["label"]["target"] == "soft" and card["training"]["config"]["target"] == "soft"
+    with pytest.raises(InputError, match="target"):
+        TrainConfig(target="hinge")
 
 
 def _strip_timing(metrics: dict) -> dict:

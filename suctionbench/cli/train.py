@@ -55,6 +55,8 @@ def train_cmd(
     max_val_datapoints: Annotated[int | None, typer.Option(
         help="Validate on a random subset of this many (after every epoch).")] = None,
     augment: Annotated[bool, typer.Option(help="Noise and symmetrisation augmentation (gqcnn's).")] = True,
+    target: Annotated[str, typer.Option(help="What the loss fits: binary (gqcnn's: robust label > threshold) or "
+                                             "soft (the robust label itself, as a probability).")] = "binary",
     overwrite: Annotated[bool, typer.Option(help="Discard a run already in --out instead of resuming it.")] = False,
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
@@ -72,14 +74,14 @@ def train_cmd(
 
         config = TrainConfig(arch=arch, epochs=epochs, device=device, split=split, batch_size=batch_size,
                              max_train_datapoints=max_datapoints, max_val_datapoints=max_val_datapoints,
-                             augment=AUGMENT_GQCNN if augment else AUGMENT_OFF, seed=seed)
+                             augment=AUGMENT_GQCNN if augment else AUGMENT_OFF, target=target, seed=seed)
         # Every option spelled out, defaults included: the card's command reproduces the run even if defaults change.
         command = shlex.join([
             "suctionbench", "train", "--dataset", str(dataset), "--out", str(out), "--arch", arch, "--epochs",
             str(epochs), "--device", device, "--split", split, "--batch-size", str(batch_size),
             *(["--max-datapoints", str(max_datapoints)] if max_datapoints else []),
             *(["--max-val-datapoints", str(max_val_datapoints)] if max_val_datapoints else []),
-            "--augment" if augment else "--no-augment", "--seed", str(seed),
+            "--augment" if augment else "--no-augment", "--target", target, "--seed", str(seed),
         ])
         with _train_progress(not as_json) as update:
             metrics = train(dataset, out, config, progress=update, command=command, overwrite=overwrite)

@@ -8,8 +8,12 @@ depth image any policy sees (the visible object: its pixels' points, segmented b
 height above the table), so the dataset generator and the policies compute them alike:
 
     0 offset        horizontal distance (m) from the grasp point to the visible object's centroid
-    1 offset_along  that offset's component along the approach's horizontal lean (m; 0 for a
-                    vertical approach): where the centroid lies relative to the way the cup tilts
+    1 offset_along  the offset dotted with the approach's horizontal part (m x sin of the tilt):
+                    where the centroid lies relative to the way the cup tilts, weighted by how
+                    far it tilts; 0 for a vertical approach and continuous through it (an
+                    approach estimated from a noisy depth image is never exactly vertical, a
+                    mesh normal on a flat top is: a feature that jumped from 0 to the full
+                    projection at vertical would differ between training and planning)
     2 rise          height (m) of the grasp point above the visible centroid
     3 length        extent (m) of the visible object along its main horizontal axis
     4 width         extent (m) across it
@@ -49,9 +53,7 @@ def object_context(object_points: np.ndarray, grasp_points: np.ndarray, approach
     spans = [np.subtract(*np.percentile(flat @ vectors[:, k], [hi, lo])) for k in (1, 0)]
     top = np.percentile(points[:, 2], hi) - table_height
     offset = centroid[:2] - grasp_points[:, :2]
-    lean = approaches[:, :2]
-    lean_norm = np.linalg.norm(lean, axis=1)
-    along = np.where(lean_norm > 1e-9, np.einsum("ni,ni->n", offset, lean) / np.maximum(lean_norm, 1e-9), 0.0)
+    along = np.einsum("ni,ni->n", offset, approaches[:, :2])
     out[:, 0] = np.linalg.norm(offset, axis=1)
     out[:, 1] = along
     out[:, 2] = grasp_points[:, 2] - centroid[2]

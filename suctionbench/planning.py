@@ -46,7 +46,7 @@ import json
 import math
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -423,12 +423,16 @@ def plan_grasp(
         camera_pose = plane.camera_pose()
         timings["plane"] = time.perf_counter() - t
     else:
-        camera_pose = np.asarray(camera_pose, dtype=float)
+        # The policies take the table at z = 0 of the pose's world (their samplers' table_height,
+        # and the object context's heights above it): move that world down by the table height.
+        given_pose = np.asarray(camera_pose, dtype=float)
+        camera_pose = given_pose.copy()
+        camera_pose[2, 3] -= table_height
     t = time.perf_counter()
     if mask is None:
-        if plane is None:  # a given pose: the plane z = table_height of its world
+        if plane is None:  # a given pose: the table is the plane z = 0 of its (shifted) world
             up = camera_pose[2, :3]  # world z in the camera frame
-            plane_of_pose = SupportPlane(up.copy(), float(table_height - camera_pose[2, 3]), 1.0, 0.0)
+            plane_of_pose = SupportPlane(up.copy(), float(-camera_pose[2, 3]), 1.0, 0.0)
             mask = segment_objects(points, valid, plane_of_pose, config)
         else:
             mask = segment_objects(points, valid, plane, config)
@@ -443,6 +447,9 @@ def plan_grasp(
     except NoGraspError as exc:
         raise InputError(f"depth image: no grasp ({exc})") from None
     timings["plan"] = time.perf_counter() - t
+    if plane is None and table_height != 0.0:  # report in the given pose's world
+        action.camera_pose = given_pose
+        observation = replace(observation, camera_pose=given_pose)
     timings["total"] = time.perf_counter() - start
     return PlanResult(action=action, observation=observation, plane=plane,
                       policy=policy_label(policy, policy_args), timings=timings)

@@ -283,3 +283,41 @@ def test_plan_command_bad_input_exits_2_with_one_line(args, message):
     assert result.exit_code == 2, result.output
     data = _last_json(result.stdout)
     assert not data["ok"] and message in data["error"] and "\n" not in data["error"]
+
+
+class _RecordingPolicy:
+    """Plans planarity-centroid's grasp and notes in its info the camera pose it was given."""
+
+    def __init__(self) -> None:
+        from suctionbench.policies.plugins import load_policy
+
+        self.inner = load_policy("planarity-centroid", {})
+
+    def plan(self, observation, rng):
+        action = self.inner.plan(observation, rng)
+        action.info["given_camera_pose"] = np.array(observation.camera_pose)
+        return action
+
+
+def recording_policy() -> _RecordingPolicy:
+    return _RecordingPolicy()
+
+
+def test_a_table_height_in_the_given_world_is_where_the_policy_sees_the_table(box_scene):
+    # The same image and camera, its pose given in a world whose table top is at z = 0.75 m (a
+    # robot's base frame): the policy must be given the table at z = 0 (the policies' samplers
+    # and the object context measure heights above z = 0), so it plans the same grasp, and the
+    # grasp is reported in the given world: 0.75 m higher.
+    pose, depth, _, _ = box_scene
+    raised = pose.copy()
+    raised[2, 3] += 0.75
+    policy = f"{Path(__file__).resolve()}:recording_policy"
+    low = plan_grasp(depth, PRIMESENSE, policy=policy, camera_pose=pose, seed=2)
+    high = plan_grasp(depth, PRIMESENSE, policy=policy, camera_pose=raised, table_height=0.75, seed=2)
+    seen = [result.action.info["given_camera_pose"] for result in (low, high)]
+    np.testing.assert_allclose(seen[1], seen[0], atol=1e-12)  # the table at z = 0 both times
+    np.testing.assert_array_equal(high.action.point, low.action.point)
+    assert high.action.q == low.action.q
+    np.testing.assert_allclose(high.action.point_world, low.action.point_world + [0.0, 0.0, 0.75], atol=1e-12)
+    np.testing.assert_array_equal(high.observation.camera_pose, raised)
+    np.testing.assert_array_equal(high.observation.mask, low.observation.mask)

@@ -114,6 +114,10 @@ def test_the_labeller_calls_a_rolled_bottle_pushed_away_only_with_the_press():
     assert not pressed.seal[0] and pressed.failure_names[0] == "pushed_away"
     top_point, top_approach = flank(0.0)
     assert episode.seal(top_point, top_approach).seal[0]
+    # the nominal wrench resistance asks the same seal, press included, whether or not it is given one
+    assert not episode.wrench_resistance(point, approach)[0]
+    assert episode.wrench_resistance(top_point, top_approach)[0] == episode.wrench_resistance(
+        top_point, top_approach, episode.seal(top_point, top_approach))[0]
 
 
 def test_the_labellers_press_is_the_episodes_touch_down():

@@ -107,7 +107,7 @@ class SuctionLabeller:
         loads (the transport at four horizontal directions, NOMINAL_TRANSPORT_AZIMUTHS)."""
         points, approaches = _check_grasps(points, approaches)
         frames = self.frames(points, approaches)
-        seal = seal or self.seal_model.evaluate(points, frames)
+        seal = seal if seal is not None else self.seal(points, approaches)  # with the press, as label() has it
         ok = seal.seal.copy()
         for wrench in self.nominal_lip_loads(frames, seal):
             ok &= resists(wrench, self.config.cup.friction, self.config.cup, seal.vacuum_force, seal.lip_heights)

@@ -309,7 +309,13 @@ def robust_wrench_resistance(
         cases = arrivals(obj, config, seal.cup, samples.force, samples.inertial)
         ok = run(seal, samples, cases)
         if obj.footprint is not None and config.press_compression > 0.0:
-            ok &= stays_put(samples.points, samples.frames[:, :, 2], samples.com, samples.force,
+            # The object rests on its footprint when pressed: its weight and centre of mass are
+            # the nominal ones, which that footprint carries. A perturbed rotation or centre of
+            # mass on the same footprint is a state no object at rest is in (a box tilted 0.1 rad
+            # on its face, a lying cylinder's centre of mass beside its support line): the table
+            # would turn it back. What the perturbation moves for this test is the grasp relative
+            # to the object (samples.points, samples.frames) and the lip's friction.
+            ok &= stays_put(samples.points, samples.frames[:, :, 2], obj.com, obj.gravity_force,
                             seal.cup.axial_stiffness * config.press_compression, samples.friction,
                             config.table_friction, obj.footprint)
         outcomes[sl] = ok.reshape(-1, j)

@@ -225,7 +225,7 @@ class NormStats:
         return stats
 
     def normalise(self, images: torch.Tensor, poses: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """Network inputs from images (B, C, H, W) in metres, C = `image_channels`, and poses (B, 2)."""
+        """Network inputs from images (B, C, H, W) in metres, C = `image_channels`, and poses (B, P): P = 2, or 8 with the object context."""
         if images.ndim != 4 or images.shape[1] != self.image_channels:
             raise ValueError(f"images {tuple(images.shape)}: expected (B, {self.image_channels}, H, W) for "
                              f"normalisation statistics of {self.image_channels} channel(s)")
@@ -295,7 +295,7 @@ def symmetrize(images: torch.Tensor, angles: torch.Tensor, flip_rows: torch.Tens
 
 def augment(images: torch.Tensor, poses: torch.Tensor, generator: torch.Generator, config: AugmentConfig
             ) -> tuple[torch.Tensor, torch.Tensor]:
-    """Augmented copies of images (B, C, H, W) in metres and poses (B, 2) [depth, angle].
+    """Augmented copies of images (B, C, H, W) in metres and poses (B, P) [depth, angle, then any object context].
 
     Channel 0 is the grasp thumbnail, channel 1 (if any) the context thumbnail of the same image:
     one Gamma factor per sample scales both, the additive field goes to channel 0 only, and the
@@ -523,7 +523,7 @@ def _take(batch: Batch, index: np.ndarray) -> Batch:
 
 
 def to_tensors(batch: Batch, device: torch.device | str = "cpu") -> tuple[torch.Tensor, torch.Tensor]:
-    """Images (B, C, 32, 32) and poses (B, 2) float32 tensors on `device`, still in physical units."""
+    """Images (B, C, 32, 32) and poses (B, P) float32 tensors on `device`, still in physical units."""
     images = torch.from_numpy(np.ascontiguousarray(batch.images, dtype=np.float32))
     poses = torch.from_numpy(np.ascontiguousarray(batch.poses, dtype=np.float32))
     return images.to(device, non_blocking=True), poses.to(device, non_blocking=True)

@@ -116,7 +116,7 @@ class DenseGQCNN(nn.Module):
 
     def head(self, maps: Sequence[torch.Tensor], windows: Sequence[Window], poses: torch.Tensor) -> torch.Tensor:
         """Logits (P, 2) at P output positions: per image stream its trunk's maps and the positions'
-        windows in them (same order as `streams`), and the normalised poses (P, 2). Only the
+        windows in them (same order as `streams`), and the normalised poses (P, D). Only the
         positions asked for pay for the fully connected layers."""
         if len(maps) != len(self.streams) or len(windows) != len(self.streams):
             raise ValueError(f"dense GQ-CNN: {len(self.streams)} image streams, given {len(maps)} maps and "
@@ -127,7 +127,7 @@ class DenseGQCNN(nn.Module):
     def merge(self, features: Sequence[torch.Tensor], poses: torch.Tensor,
               shared: Sequence[torch.Tensor | None] | None = None) -> torch.Tensor:
         """Logits (P, 2) at P positions from each image stream's `DenseStream.features` and their
-        normalised poses (P, 2): the network's pose stream and merge layers.
+        normalised poses (P, D): the network's pose stream and merge layers.
 
         `shared`, per stream, maps positions to rows of its features ((P,) long; None: one row per
         position): positions that share a window share its features, computed once. The merge's

@@ -89,6 +89,7 @@ import torch
 from torch import nn
 
 from suctionbench.errors import InputError
+from suctionbench.sensing.object_context import OBJECT_CONTEXT_COLUMNS
 
 IMAGE_SIZE = 32
 """Side of the square thumbnail both networks take (pixels)."""
@@ -96,7 +97,7 @@ IMAGE_SIZE = 32
 POSE_DIM = 2
 """Length of the pose vector: [gripper depth, approach angle]."""
 
-OBJECT_CONTEXT_DIM = 6
+OBJECT_CONTEXT_DIM = len(OBJECT_CONTEXT_COLUMNS)
 """Length of the object context the `context-pose` net appends to its pose vector
 (`suctionbench.sensing.object_context`: where the grasp lies on the visible object, in metres)."""
 

@@ -225,7 +225,8 @@ class NormStats:
         return stats
 
     def normalise(self, images: torch.Tensor, poses: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """Network inputs from images (B, C, H, W) in metres, C = `image_channels`, and poses (B, P): P = 2, or 8 with the object context."""
+        """Network inputs from images (B, C, H, W) in metres, C = `image_channels`, and poses (B, P)
+        (P = 2, or 8 with the object context)."""
         if images.ndim != 4 or images.shape[1] != self.image_channels:
             raise ValueError(f"images {tuple(images.shape)}: expected (B, {self.image_channels}, H, W) for "
                              f"normalisation statistics of {self.image_channels} channel(s)")

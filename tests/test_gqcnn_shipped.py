@@ -13,7 +13,7 @@ from suctionbench.policies.gqcnn import ADV_MODEL, default_model_dir
 from suctionbench.resources import asset_path
 
 MODEL_DIR = default_model_dir()
-VAL_ACC, VAL_AP = 0.851, 0.818
+VAL_ACC, VAL_AP = 0.857, 0.795
 """The shipped model's held-out accuracy and AP, as its README and the project README quote them."""
 
 
@@ -25,13 +25,18 @@ def policy():
 def test_shipped_model_card_and_held_out_metrics():
     model = load_model(MODEL_DIR)
     card = model.card
-    assert card["arch"] == "context" and card["dataset"]["datapoints"] >= 2_800_000
+    # context-pose with the soft target, on the 1.2 M-datapoint dataset of the pick's loads (the
+    # issue's floor is 1 M where 2.8 M cannot be generated in the session; eval/gqcnn/README.md)
+    assert card["arch"] == "context-pose" and card["dataset"]["datapoints"] >= 1_000_000
+    assert card["label"]["target"] == "soft"
     # trained with an object-wise split: validation is on objects never seen in training; the
     # README and the model's own README quote these held-out figures
     assert card["training"]["config"]["split"] == "object_wise"
     assert card["metrics"]["val_accuracy"] == pytest.approx(VAL_ACC, abs=5e-4)
     assert card["metrics"]["val_ap"] == pytest.approx(VAL_AP, abs=5e-4)
-    q = model.predict(np.full((4, 2, 32, 32), 0.6, np.float32), np.array([[0.6, 0.0]] * 4, np.float32))
+    poses = np.zeros((4, model.pose_dim), np.float32)
+    poses[:, 0] = 0.6
+    q = model.predict(np.full((4, 2, 32, 32), 0.6, np.float32), poses)
     assert q.shape == (4,) and np.all((q >= 0) & (q <= 1))
 
 

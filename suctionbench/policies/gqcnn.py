@@ -70,7 +70,7 @@ from suctionbench.sensing.thumbnails import (
     project_grasps,
 )
 
-DEFAULT_MODEL = ("models", "gqcnn-context")
+DEFAULT_MODEL = ("models", "gqcnn-context-pose")
 """Path parts, under assets/, of the model `make_policy("gqcnn")` loads when given none."""
 
 ADV_MODEL = ("models", "gqcnn-adv")

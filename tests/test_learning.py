@@ -702,6 +702,7 @@ def test_cli_train_and_show(dataset, tmp_path):
     assert trained["num_val"] == 30  # the validation subset
     card = json.loads((out / CARD_NAME).read_text())
     assert "train" in card["command"] and "--seed 3" in card["command"] and "--max-val-datapoints 30" in card["command"]
+    assert "--target binary" in card["command"] and card["label"]["target"] == "binary"  # the default, spelled out
 
     result = runner.invoke(app, ["model", "show", str(out), "--json"])
     assert result.exit_code == 0, result.output

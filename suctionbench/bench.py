@@ -294,5 +294,12 @@ class _Unbatched:
 
         return image_channels(self.model)
 
+    @property
+    def pose_dim(self) -> int:
+        """The wrapped model's (the policy appends the object context for a model that reads it)."""
+        from suctionbench.policies.gqcnn import pose_dim
+
+        return pose_dim(self.model)
+
     def predict(self, images: np.ndarray, poses: np.ndarray) -> np.ndarray:
         return np.concatenate([self.model.predict(images[i : i + 1], poses[i : i + 1]) for i in range(len(images))])

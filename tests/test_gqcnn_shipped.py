@@ -74,3 +74,24 @@ def test_pick_with_the_gqcnn_policy_is_a_valid_episode():
 
     result = PickRunner(PickRequest("basic/box_tea", policy="gqcnn", seed=1)).run()
     assert result["valid"] and result["policy_q"] is not None and 0 <= result["policy_q"] <= 1
+
+
+def test_bench_plans_unbatched_reference_passes_what_the_policy_asks_of_the_model(policy):
+    # `bench plan` times the CEM policy against itself with the model wrapped to score one
+    # candidate per call; the wrapper must answer everything the policy asks of a model (the
+    # context channel, the object context in the pose vector), and score as the model does.
+    from suctionbench.bench import _Unbatched
+
+    model = policy.model.load()
+    wrapped = _Unbatched(model)
+    assert wrapped.image_channels == model.image_channels and wrapped.pose_dim == model.pose_dim == 8
+    scene = Scene("basic/box_tea")
+    observation = scene.observation(mask=scene.mask)
+    planned = policy.plan(observation, np.random.default_rng(0))
+    policy.model = wrapped
+    try:
+        reference = policy.plan(observation, np.random.default_rng(0))
+    finally:
+        policy.model = model
+    np.testing.assert_array_equal(reference.pixel, planned.pixel)
+    assert abs(reference.q - planned.q) < 1e-4  # one candidate per call: last-bit BLAS differences only

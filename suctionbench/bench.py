@@ -287,19 +287,10 @@ class _Unbatched:
     def __init__(self, model: Any):
         self.model = model
 
-    @property
-    def image_channels(self) -> int:
-        """The wrapped model's (the policy cuts the context thumbnail for a two-channel model)."""
-        from suctionbench.policies.gqcnn import image_channels
-
-        return image_channels(self.model)
-
-    @property
-    def pose_dim(self) -> int:
-        """The wrapped model's (the policy appends the object context for a model that reads it)."""
-        from suctionbench.policies.gqcnn import pose_dim
-
-        return pose_dim(self.model)
+    def __getattr__(self, name: str) -> Any:
+        """Everything else the policy asks of a model (its image channels, its pose vector's
+        length, ...) is the wrapped model's."""
+        return getattr(self.model, name)
 
     def predict(self, images: np.ndarray, poses: np.ndarray) -> np.ndarray:
         return np.concatenate([self.model.predict(images[i : i + 1], poses[i : i + 1]) for i in range(len(images))])

@@ -413,7 +413,7 @@ def plan_grasp(
         options.setdefault("model", str(model))
     planner = load_policy(policy, options)
     timings: dict[str, float] = {}
-    plane = None
+    plane = given_pose = None
     valid = depth > 0
     points = intrinsics.deproject(depth)
     if camera_pose is None:
@@ -447,7 +447,7 @@ def plan_grasp(
     except NoGraspError as exc:
         raise InputError(f"depth image: no grasp ({exc})") from None
     timings["plan"] = time.perf_counter() - t
-    if plane is None and table_height != 0.0:  # report in the given pose's world
+    if given_pose is not None:  # report in the given pose's world
         action.camera_pose = given_pose
         observation = replace(observation, camera_pose=given_pose)
     timings["total"] = time.perf_counter() - start

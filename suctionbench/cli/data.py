@@ -57,14 +57,14 @@ def generate(
     """Generate a Dex-Net-style dataset: rendered noisy depth thumbnails with robust labels."""
 
     def body() -> dict[str, Any]:
-        from suctionbench.config import LabelConfig, cup_preset
+        from suctionbench.config import cup_preset
         from suctionbench.dataset.generate import GenerationConfig, generate_dataset
         from suctionbench.objects.registry import resolve_objects
 
         label = label_config(cup_preset(cup), load)
         output_dir(out, "--out")
         require_disk(out, datapoints * BYTES_PER_DATAPOINT, f"--datapoints {datapoints}")
-        require_memory(label_memory(grasps_per_object, LabelConfig().perturbation.num_samples)
+        require_memory(label_memory(grasps_per_object, label.perturbation.num_samples)
                        * resolve_workers(workers), f"--grasps-per-object {grasps_per_object} x --workers")
         records = resolve_objects(objects)
         config = GenerationConfig(

@@ -170,14 +170,18 @@ class Arrival:
         transport = None if self.transport_force is None else self.transport_force[rows]
         return dataclasses.replace(self, weight=self.weight[rows], transport_force=transport)
 
+    def inertia_along(self, n: np.ndarray, frames: np.ndarray) -> np.ndarray:
+        """(N, 3) I_c n: the inertia about the centre of mass turned into each contact frame
+        (`frames` (N, 3, 3), columns in the mesh frame), applied to the axis n (contact frame)."""
+        return np.einsum("nji,jk,nkl,nl->ni", frames, self.inertia, frames, n)
+
     def inertia_about(self, n: np.ndarray, arm: np.ndarray, frames: np.ndarray) -> np.ndarray:
         """(N,) moment of inertia about the tilt axis n (contact frame) through the lip centre:
-        n' I n (I turned into the contact frame) + m |n x r|^2, r the lip centre to the centre of
-        mass (contact frame; parallel axes)."""
-        inertia_c = np.einsum("nji,jk,nkl->nil", frames, self.inertia, frames)
-        own = np.einsum("ni,nij,nj->n", n, inertia_c, n)
+        n' I_c n (`inertia_along`) + m |n x r|^2, r the lip centre to the centre of mass (contact
+        frame; parallel axes)."""
         lever = np.cross(n, arm)
-        return own + self.mass * np.einsum("ni,ni->n", lever, lever)
+        return np.einsum("ni,ni->n", n, self.inertia_along(n, frames)) + self.mass * np.einsum("ni,ni->n", lever,
+                                                                                                 lever)
 
     def lift_off(self, n: np.ndarray, phi_s: np.ndarray, ring_centre: np.ndarray, com: np.ndarray,
                  frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -310,8 +310,8 @@ def lip_load(
     if arrival is None:  # a point mass (docstring): m alpha = (M_n - R) / |n x r|^2
         spin = np.where(arm2 > 1e-12, unbalanced / np.maximum(arm2, 1e-12), 0.0)[:, None]
         return np.concatenate([f - spin * arm, torque - spin * np.cross(swing.r, arm)], axis=1)
-    own = np.einsum("nji,jk,nkl,nl->ni", frames, arrival.inertia, frames, swing.n)  # I_c n, contact frame
-    inertia = np.einsum("ni,ni->n", swing.n, own) + arrival.mass * arm2
+    own = arrival.inertia_along(swing.n, frames)  # I_c n, contact frame
+    inertia = np.einsum("ni,ni->n", swing.n, own) + arrival.mass * arm2  # arrival.inertia_about, arm2 at hand
     alpha = np.where(inertia > 1e-15, unbalanced / np.maximum(inertia, 1e-15), 0.0)[:, None]
     spin = arrival.mass * alpha  # m alpha
     return np.concatenate([f - spin * arm, torque - spin * np.cross(swing.r, arm) - alpha * own], axis=1)

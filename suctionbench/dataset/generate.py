@@ -225,11 +225,11 @@ def image_object_context(intrinsics: CameraIntrinsics, depth: np.ndarray, noisy:
 
     rot, origin = camera_pose[:3, :3], camera_pose[:3, 3]
     mask = (noisy > 0) & ((intrinsics.deproject(depth) @ rot[2] + origin[2]) > OBJECT_CLEARANCE)
-    cloud = intrinsics.deproject(noisy) @ rot.T + origin
+    cloud = intrinsics.deproject(noisy)  # camera frame: only the object's and the grasps' pixels are moved
     cols = np.clip(np.rint(pixels[:, 0]).astype(np.intp), 0, noisy.shape[1] - 1)
     rows = np.clip(np.rint(pixels[:, 1]).astype(np.intp), 0, noisy.shape[0] - 1)
-    grasps = np.where((noisy[rows, cols] > 0)[:, None], cloud[rows, cols], exact_points)
-    return object_context(cloud[mask], grasps, approaches)
+    grasps = np.where((noisy[rows, cols] > 0)[:, None], cloud[rows, cols] @ rot.T + origin, exact_points)
+    return object_context(cloud[mask] @ rot.T + origin, grasps, approaches)
 
 
 def _empty(name: str) -> np.ndarray:

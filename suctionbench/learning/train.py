@@ -392,19 +392,19 @@ def _train_epoch(session: _Session, data: SplitData, config: TrainConfig, thresh
     batches = data.batches(config.batch_size, session.shuffle_rng, config.shuffle_shards)
     for step, batch in enumerate(batches, start=1):
         images, poses = to_tensors(batch, device)
-        target = torch.from_numpy(labels_of(batch.metric, threshold)).to(device)
+        labels = torch.from_numpy(labels_of(batch.metric, threshold)).to(device)
         if config.augment.enabled:
             images, poses = augment(images, poses, session.augment_gen, config.augment)
         images, poses = session.stats.normalise(images, poses)
         with _autocast(device):
             logits = network(images, poses)
-        loss = _loss(logits.float(), batch.metric, target, config.target)
+        loss = _loss(logits.float(), batch.metric, labels, config.target)
         session.optimizer.zero_grad(set_to_none=True)
         loss.backward()
         session.optimizer.step()
         session.scheduler.step()
         loss_sum += loss.detach() * len(batch)
-        correct += (logits.detach().argmax(dim=1) == target).sum()
+        correct += (logits.detach().argmax(dim=1) == labels).sum()
         seen += len(batch)
         if step % PROGRESS_EVERY == 0:
             report(seen, float(loss_sum) / seen, int(correct) / seen)

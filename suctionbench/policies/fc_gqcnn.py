@@ -44,7 +44,15 @@ from scipy import ndimage
 
 from suctionbench.errors import InputError
 from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, scene_cloud
-from suctionbench.policies.gqcnn import CEMConfig, GQCNNPolicy, LazyModel, network_poses, resolve_model
+from suctionbench.policies.gqcnn import (
+    CEMConfig,
+    GQCNNPolicy,
+    LazyModel,
+    network_poses,
+    pose_dim,
+    resolve_model,
+    seen_object,
+)
 from suctionbench.sensing.thumbnails import (
     THUMBNAIL_CONTEXT,
     THUMBNAIL_GQCNN,
@@ -137,7 +145,8 @@ class FCGQCNNPolicy:
         return model, self._dense
 
     def quality(self, observation: Observation, cloud) -> dict[str, np.ndarray]:
-        """Every valid pixel's grasp and its dense q (module docstring, steps 1-2)."""
+        """Every valid pixel's grasp and its dense q (module docstring, steps 1-2), with the context
+        image and the object's shape it read (None where the model reads neither), for the refinement."""
         import torch
 
         model, dense = self._network()
@@ -145,7 +154,8 @@ class FCGQCNNPolicy:
         rows, cols = np.nonzero(cloud.valid)
         pixels, points, approaches = cloud.grasps_at(rows, cols)
         _, depths, angles = project_grasps(points, approaches, cloud.intrinsics)
-        poses = network_poses(model, observation, cloud, depths, points, approaches, cfg.sampler.table_height)
+        shape = seen_object(observation, cloud, cfg.sampler.table_height) if pose_dim(model) > 2 else None
+        poses = network_poses(model, observation, cloud, depths, points, approaches, cfg.sampler.table_height, shape)
         step = 2.0 * math.pi / cfg.rotations
         bins = np.mod(np.rint(angles / step).astype(np.intp), cfg.rotations)
         used = np.unique(bins)
@@ -176,7 +186,8 @@ class FCGQCNNPolicy:
                 logits = dense.merge(features, pose_in[mine], shared)
                 q[mine] = torch.softmax(logits, dim=1)[:, 1].double().numpy()
         return {"rows": rows, "cols": cols, "pixels": pixels, "points": points, "approaches": approaches,
-                "poses": poses, "q": q, "rotations": len(used)}
+                "poses": poses, "q": q, "rotations": len(used),
+                "context": views[1][1] if len(views) == 2 else None, "shape": shape}
 
     def plan(self, observation: Observation, rng: np.random.Generator) -> GraspAction:
         start = time.perf_counter()
@@ -189,7 +200,8 @@ class FCGQCNNPolicy:
         if cfg.refine:
             count = min(cfg.refine, len(dense["q"]))
             top = np.argpartition(-dense["q"], count - 1)[:count]
-            exact = self.exact.score(observation, cloud, dense["rows"][top], dense["cols"][top])
+            exact = self.exact.score(observation, cloud, dense["rows"][top], dense["cols"][top], dense["context"],
+                                     dense["shape"])  # the context image and object filtered once per plan
             pick = int(np.argmax(exact["q"]))
             best, q = int(top[pick]), float(exact["q"][pick])
         return GraspAction(

@@ -59,7 +59,7 @@ import numpy as np
 from suctionbench.errors import InputError
 from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, SceneCloud, scene_cloud
 from suctionbench.resources import asset_path
-from suctionbench.sensing.object_context import object_context
+from suctionbench.sensing.object_context import ObjectShape, object_context
 from suctionbench.sensing.thumbnails import (
     THUMBNAIL_CONTEXT,
     THUMBNAIL_GQCNN,
@@ -97,17 +97,26 @@ def pose_dim(model: Any) -> int:
     return int(getattr(model, "pose_dim", 2))
 
 
+def seen_object(observation: Observation, cloud: SceneCloud, table_height: float) -> ObjectShape | None:
+    """The object the cloud segments, as the object context reads it (world frame, the table at
+    `table_height`): computed once per plan and shared by its `network_poses` calls."""
+    rotation, origin = observation.camera_pose[:3, :3], observation.camera_pose[:3, 3]
+    return ObjectShape.of(cloud.object_points @ rotation.T + origin, table_height)
+
+
 def network_poses(model: Any, observation: Observation, cloud: SceneCloud, depths: np.ndarray, points: np.ndarray,
-                  approaches: np.ndarray, table_height: float) -> np.ndarray:
+                  approaches: np.ndarray, table_height: float, shape: ObjectShape | None = None) -> np.ndarray:
     """The pose vectors (N, 2) of grasps at camera-frame `points` along `approaches` at gripper
     `depths`, and, for a model that reads it, the object context (N, 6) of each, appended: where
-    it lies on the object the cloud segments, in metres (world frame, the table at `table_height`)."""
+    it lies on the object the cloud segments, in metres (world frame, the table at `table_height`;
+    `shape`: that object's `seen_object`, computed here if not given)."""
     poses = pose_vector(depths, approaches, cloud.table_normal)
     if pose_dim(model) == 2:
         return poses
+    if shape is None:
+        shape = seen_object(observation, cloud, table_height)
     rotation, origin = observation.camera_pose[:3, :3], observation.camera_pose[:3, 3]
-    context = object_context(cloud.object_points @ rotation.T + origin, points @ rotation.T + origin,
-                             approaches @ rotation.T, table_height)
+    context = object_context(shape, points @ rotation.T + origin, approaches @ rotation.T, table_height)
     return np.concatenate([poses, context], axis=1)
 
 
@@ -342,13 +351,14 @@ class GQCNNPolicy:
 
     def score(
         self, observation: Observation, cloud: SceneCloud, rows: np.ndarray, cols: np.ndarray,
-        context: np.ndarray | None = None,
+        context: np.ndarray | None = None, shape: ObjectShape | None = None,
     ) -> dict[str, np.ndarray]:
         """Grasps at pixels (rows, cols) with their pose vectors and predicted quality.
 
         Thumbnails (N, 32, 32) for a one-channel model; for a two-channel one (N, 2, 32, 32), the
         grasp thumbnail and the context thumbnail of the same grasp, cut from `context` (the
-        observation's `context_image`, filtered here if not given: `plan` filters once).
+        observation's `context_image`, filtered here if not given: `plan` filters once). For a
+        model that reads the object context, `shape` is the `seen_object` (likewise once per plan).
         """
         pixels, points, approaches = cloud.grasps_at(rows, cols)
         _, depths, angles = project_grasps(points, approaches, cloud.intrinsics)
@@ -359,7 +369,7 @@ class GQCNNPolicy:
             wide = extract_thumbnails(context, pixels, angles, self.config.context_thumbnail)
             thumbnails = np.stack([thumbnails, wide], axis=1)
         poses = network_poses(self.model, observation, cloud, depths, points, approaches,
-                              self.config.sampler.table_height)
+                              self.config.sampler.table_height, shape)
         q = np.asarray(self.model.predict(thumbnails, poses), dtype=float).reshape(-1)
         if q.shape != (len(rows),):
             raise RuntimeError(f"GQ-CNN model returned {q.shape} qualities for {len(rows)} grasps")
@@ -388,8 +398,9 @@ class GQCNNPolicy:
         cfg = self.config
         cloud = scene_cloud(observation, cfg.sampler)
         context = context_image(observation.depth, cfg.context_thumbnail) if image_channels(self.model) == 2 else None
+        shape = seen_object(observation, cloud, cfg.sampler.table_height) if pose_dim(self.model) > 2 else None
         rows, cols = cloud.sample(cfg.num_seed_samples, rng)
-        rounds = [self.score(observation, cloud, rows, cols, context)]
+        rounds = [self.score(observation, cloud, rows, cols, context, shape)]
         for _ in range(cfg.num_iters):
             q = rounds[-1]["q"]
             elite = np.argsort(-q, kind="stable")[: cfg.elite_count(len(q))]
@@ -401,7 +412,7 @@ class GQCNNPolicy:
             rows, cols = self._resample(gmm, mean, std, cloud, rng)
             if len(rows) == 0:
                 break
-            rounds.append(self.score(observation, cloud, rows, cols, context))
+            rounds.append(self.score(observation, cloud, rows, cols, context, shape))
         candidates = {key: np.concatenate([r[key] for r in rounds]) for key in rounds[0]}
         candidates["iteration"] = np.concatenate([np.full(len(r["q"]), i) for i, r in enumerate(rounds)])
         best = int(np.argmax(candidates["q"]))

@@ -26,6 +26,8 @@ of the points, so a few stray edge pixels (depth noise at the silhouette) do not
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 OBJECT_CONTEXT_COLUMNS = ("offset", "offset_along", "rise", "length", "width", "height")
@@ -35,28 +37,48 @@ SPREAD_PERCENTILES = (1.0, 99.0)
 """Percentiles of the points' projections that bound the extents and the top."""
 
 
-def object_context(object_points: np.ndarray, grasp_points: np.ndarray, approaches: np.ndarray,
-                   table_height: float = 0.0) -> np.ndarray:
+@dataclass(frozen=True)
+class ObjectShape:
+    """What the object context reads of the visible object, once per image: its points' centroid
+    (3,) and horizontal extents and top above the table (module docstring, columns 3-5); None for
+    an object with no point seen."""
+
+    centroid: np.ndarray
+    length: float
+    width: float
+    height: float
+
+    @classmethod
+    def of(cls, object_points: np.ndarray, table_height: float = 0.0) -> ObjectShape | None:
+        """The shape of the object seen as `object_points` (M, 3), world frame (z up, the table
+        at `table_height`); None when M = 0."""
+        points = np.asarray(object_points, dtype=float).reshape(-1, 3)
+        if len(points) == 0:
+            return None
+        centroid = points.mean(axis=0)
+        flat = points[:, :2] - centroid[:2]
+        _, vectors = np.linalg.eigh(flat.T @ flat)  # ascending: the main axis last
+        lo, hi = SPREAD_PERCENTILES
+        length, width = (float(np.subtract(*np.percentile(flat @ vectors[:, k], [hi, lo]))) for k in (1, 0))
+        return cls(centroid, length, width, float(np.percentile(points[:, 2], hi) - table_height))
+
+
+def object_context(object_points: np.ndarray | ObjectShape | None, grasp_points: np.ndarray,
+                   approaches: np.ndarray, table_height: float = 0.0) -> np.ndarray:
     """(N, 6) float32 object context (module docstring) of grasps at `grasp_points` (N, 3) along
-    `approaches` (N, 3, into the object) on the object seen as `object_points` (M, 3); all in the
-    world frame (z up, the table at `table_height`). A grasp with no object point seen gets zeros."""
+    `approaches` (N, 3, into the object) on the object seen as `object_points` (M, 3), or its
+    `ObjectShape` when several calls share one image; all in the world frame (z up, the table at
+    `table_height`). A grasp with no object point seen gets zeros."""
     grasp_points = np.asarray(grasp_points, dtype=float).reshape(-1, 3)
     approaches = np.asarray(approaches, dtype=float).reshape(-1, 3)
-    points = np.asarray(object_points, dtype=float).reshape(-1, 3)
+    shape = object_points if object_points is None or isinstance(object_points, ObjectShape) else \
+        ObjectShape.of(object_points, table_height)
     out = np.zeros((len(grasp_points), len(OBJECT_CONTEXT_COLUMNS)), dtype=np.float32)
-    if len(points) == 0 or len(grasp_points) == 0:
+    if shape is None or len(grasp_points) == 0:
         return out
-    centroid = points.mean(axis=0)
-    flat = points[:, :2] - centroid[:2]
-    _, vectors = np.linalg.eigh(flat.T @ flat)  # ascending: the main axis last
-    lo, hi = SPREAD_PERCENTILES
-    spans = [np.subtract(*np.percentile(flat @ vectors[:, k], [hi, lo])) for k in (1, 0)]
-    top = np.percentile(points[:, 2], hi) - table_height
-    offset = centroid[:2] - grasp_points[:, :2]
-    along = np.einsum("ni,ni->n", offset, approaches[:, :2])
+    offset = shape.centroid[:2] - grasp_points[:, :2]
     out[:, 0] = np.linalg.norm(offset, axis=1)
-    out[:, 1] = along
-    out[:, 2] = grasp_points[:, 2] - centroid[2]
-    out[:, 3], out[:, 4] = spans
-    out[:, 5] = top
+    out[:, 1] = np.einsum("ni,ni->n", offset, approaches[:, :2])
+    out[:, 2] = grasp_points[:, 2] - shape.centroid[2]
+    out[:, 3], out[:, 4], out[:, 5] = shape.length, shape.width, shape.height
     return out

@@ -1,4 +1,4 @@
-"""`suctionbench bench label|episode|agreement|generate|plan`: speed and agreement figures."""
+"""`suctionbench bench label|episode|bin|agreement|generate|plan`: speed and agreement figures."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from typing import Annotated, Any
 
 import typer
 
-from suctionbench.cli.common import JsonOpt, SeedOpt, bench_app, print_kv, resolve_workers, run_command
+from suctionbench.cli.common import JsonOpt, SeedOpt, bench_app, print_kv, print_rows, resolve_workers, run_command
 from suctionbench.errors import InputError
 
 
@@ -34,6 +34,33 @@ def bench_label(
         )
         if not as_json:
             print_kv("bench label: vectorised vs reference", result)
+        return result
+
+    run_command(as_json, body)
+
+
+@bench_app.command("bin")
+def bench_bin_cmd(
+    counts: Annotated[str, typer.Option(help="Bin sizes to time, comma-separated object counts.")] = "3,6,10,15",
+    policy: Annotated[str, typer.Option(help="Policy planning the attempts.")] = "planarity-centroid",
+    attempts: Annotated[int, typer.Option(help="Attempts timed per bin size.")] = 3,
+    cores: Annotated[int, typer.Option(help="CPU cores the process may use (0 = all).")] = 1,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """A pick in clutter: seconds per attempt and to fill the bin, per object count, against a
+    single-object pick of the same policy in the same run."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.bench import bench_bin
+
+        try:
+            sizes = [int(c) for c in counts.split(",") if c.strip()]
+        except ValueError:
+            raise InputError(f"--counts '{counts}': expected comma-separated integers") from None
+        result = bench_bin(counts=sizes, policy=policy, attempts=attempts, seed=seed, cores=cores)
+        if not as_json:
+            print_rows(f"bench bin ({policy}, {result['cores']} core(s))", result["rows"])
         return result
 
     run_command(as_json, body)

@@ -45,6 +45,8 @@ def eval_cmd(
     ] = "primesense",
     policy_arg: PolicyArgOpt = None,
     seed: Annotated[int | None, typer.Option(help="Base seed of the trials (default: the task's).")] = None,
+    masks: Annotated[str, typer.Option(help="Bin tasks: object regions from 'depth' segmentation or the "
+                                            "renderer's 'oracle' instance masks.")] = "depth",
     resume: Annotated[bool, typer.Option(help="Finish an interrupted run (OUT.incomplete) of the same "
                                               "configuration, keeping its finished trials. With none there, "
                                               "the run starts afresh and says so: a 'note:' line on stderr "
@@ -59,13 +61,17 @@ def eval_cmd(
 
     def body() -> dict[str, Any]:
         from suctionbench.evaluation.runner import run_eval
-        from suctionbench.evaluation.tasks import Task, load_task
+        from suctionbench.evaluation.tasks import Task, is_bin_task, load_task
         from suctionbench.policies.plugins import parse_policy_args
 
+        options = parse_policy_args(policy_arg or [])
         if (set_name is None) == (task is None):
             raise InputError("give exactly one of --set S or --task T")
+        if task is not None and is_bin_task(task):
+            return _bin_eval(task, policy, out, model=model, trials=trials, seed=seed, workers=workers, engine=engine,
+                             address=address, masks=masks, cup=cup, camera=camera, options=options,
+                             overwrite=overwrite, resume=resume, as_json=as_json)
         the_task = load_task(task) if task else Task(name=set_name, set=set_name, trials=trials or 25)
-        options = parse_policy_args(policy_arg or [])
         runs = {}
         if metric is not None:
             metrics = (metric,)
@@ -100,6 +106,34 @@ def eval_cmd(
         return {"out": str(out), "runs": runs} if len(runs) > 1 else {"out": str(out), **next(iter(runs.values()))}
 
     run_command(as_json, body)
+
+
+def _bin_eval(task: str, policy: str, out: Path, *, model: str | None, trials: int | None, seed: int | None,
+              workers: int, engine: str, address: str | None, masks: str, cup: str, camera: str,
+              options: dict[str, Any], overwrite: bool, resume: bool, as_json: bool) -> dict[str, Any]:
+    """`eval --task bin-*`: the cluttered-bin benchmark (suctionbench.clutter)."""
+    from suctionbench.clutter.benchmark import run_bin_eval
+    from suctionbench.clutter.tasks import load_bin_task
+
+    if resume:
+        raise InputError("--resume: bin runs are written whole; rerun with --overwrite")
+    the_task = load_bin_task(task)
+    count = trials or the_task.trials
+    with progress_bar(count, f"{policy} bins", not as_json) as advance:
+        run = run_bin_eval(the_task, policy, out, model=model, trials=trials, seed=seed,
+                           workers=resolve_workers(workers), engine=engine, address=address, masks=masks, cup=cup,
+                           camera=camera, policy_args=options, overwrite=overwrite, progress=advance)
+    if not as_json:
+        m = run["metrics"]
+        print_rows(f"eval {the_task.name} ({masks} masks)", [{
+            "policy": policy, "bins": m["bins"], "objects": m["objects"], "clear%": _percent(m["clearance"]),
+            "att": m["attempts"], "succ%": _percent(m["success_per_attempt"]), "att/obj": m["attempts_per_object"],
+            "picks/h": m["picks_per_hour"], "prec%": _percent(m["label_precision"])}])
+        console().print("clear%: objects removed; succ%: successful attempts; att/obj: attempts per object "
+                        "removed; picks/h: objects removed per hour (simulated motion + modelled compute); "
+                        "prec%: success among grasps labelled robust", highlight=False)
+        print_rows("failure reasons", [{"reason": k, "attempts": v} for k, v in m["failures"].items()])
+    return run
 
 
 def _percent(value: float | None) -> str:

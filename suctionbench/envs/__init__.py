@@ -18,6 +18,7 @@ import gymnasium
 
 ENVIRONMENTS: dict[str, str] = {
     "suctionbench/SuctionPick-v0": "suctionbench.envs.suction_pick:SuctionPickEnv",
+    "suctionbench/SuctionBin-v0": "suctionbench.envs.suction_bin:SuctionBinEnv",
 }
 """Environment id -> entry point ("module:Class"), imported only by gymnasium.make."""
 
@@ -32,7 +33,11 @@ def __getattr__(name: str) -> Any:
         from suctionbench.envs.suction_pick import SuctionPickEnv
 
         return SuctionPickEnv
+    if name == "SuctionBinEnv":
+        from suctionbench.envs.suction_bin import SuctionBinEnv
+
+        return SuctionBinEnv
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = ["ENVIRONMENTS", "SuctionPickEnv"]
+__all__ = ["ENVIRONMENTS", "SuctionBinEnv", "SuctionPickEnv"]

@@ -176,7 +176,11 @@ def build_report(run_dirs: list[Path], out: Path, command: str | None = None,
     "incomplete" in the result. The report is written to a temporary sibling of `out` and renamed
     into place at the end (all or nothing); an `out` that holds anything but an old report is
     refused."""
+    from suctionbench.clutter.report import is_bin_run
+
     run_dirs = expand_run_dirs(run_dirs)
+    bin_dirs = [d for d in run_dirs if is_bin_run(d)]  # bin runs are written whole: never incomplete
+    run_dirs = [d for d in run_dirs if d not in bin_dirs]
     incomplete = []
     for run_dir in run_dirs:
         status = run_status(run_dir)
@@ -193,13 +197,14 @@ def build_report(run_dirs: list[Path], out: Path, command: str | None = None,
             s["label"] += f" (incomplete {s['trials']}/{s['expected_trials']})"
     final = Path(out)
     with atomic_dir(final, not_a_report) as out:
-        result = _write_report(run_dirs, summaries, all_records, out, command)
+        result = _write_report(run_dirs, summaries, all_records, out, command, bin_dirs)
     return {"out": str(final), **result, "incomplete": incomplete}
 
 
 def _write_report(run_dirs: list[Path], summaries: list[dict[str, Any]], all_records: list[list[dict[str, Any]]],
-                  out: Path, command: str | None) -> dict[str, Any]:
-    """The report's files in `out` (a fresh directory); returns the tables and figure names."""
+                  out: Path, command: str | None, bin_dirs: list[Path] = ()) -> dict[str, Any]:
+    """The report's files in `out` (a fresh directory); returns the tables and figure names. Bin
+    runs (`bin_dirs`) add their sections (`suctionbench.clutter.report`)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -253,6 +258,14 @@ def _write_report(run_dirs: list[Path], summaries: list[dict[str, Any]], all_rec
     tables = _tables(summaries)
     objects = _object_cards(per_object, out)
     runs = [_run_info(run_dir, summary) for run_dir, summary in zip(run_dirs, summaries, strict=True)]
+    if bin_dirs:
+        from suctionbench.clutter.report import BIN_GALLERY, bin_sections
+
+        sections = bin_sections(list(bin_dirs), out)
+        tables += [Table(title, note, rows) for title, note, rows in sections["tables"]]
+        figures += sections["figures"]
+        galleries[BIN_GALLERY] = sections["gallery"]
+        runs += sections["footer"]
     footer = {"runs": runs, "versions": _versions(runs),
               "report_command": command or " ".join(["suctionbench", *map(_quote, sys.argv[1:])])}
     _write_markdown(out, tables, figures, objects, galleries, footer)

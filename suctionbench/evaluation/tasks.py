@@ -49,17 +49,19 @@ FIELD_TYPES: dict[str, type] = {"name": str, "set": str, "trials": int, "placeme
 """The TOML type of each task key (metrics: a list of metric names)."""
 
 
-def load_task(name: str) -> Task:
-    """A shipped task by name, or a task TOML file by path; InputError naming the file and the key
-    for anything malformed: not UTF-8 TOML, unknown keys, wrong types, values out of range."""
-    from suctionbench.contact.metrics import METRICS
-    from suctionbench.sim.pick import PLACEMENTS
-    from suctionbench.validate import COUNT_MAX, OPTION_RULES
-
+def task_path(name: str) -> Path:
+    """The TOML file of a task: a shipped task by name, or a path ending in .toml; InputError
+    naming the shipped tasks when there is none."""
     path = Path(name) if name.endswith(".toml") else tasks_dir() / f"{name}.toml"
     if not path.is_file():
         known = ", ".join(sorted(p.stem for p in tasks_dir().glob("*.toml")))
         raise InputError(f"task '{name}' is unknown (known: {known})")
+    return path
+
+
+def read_task_toml(path: Path, field_types: dict[str, type]) -> dict:
+    """A task file's keys, `name` defaulting to the file's stem; InputError naming the file for
+    anything but UTF-8 TOML whose keys are all in `field_types` with those types."""
     try:
         data = tomllib.loads(path.read_text())
     except (OSError, UnicodeDecodeError) as exc:
@@ -67,12 +69,33 @@ def load_task(name: str) -> Task:
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"task '{path}': malformed TOML ({exc})") from None
     data.setdefault("name", path.stem)
-    unknown = sorted(set(data) - set(FIELD_TYPES))
+    unknown = sorted(set(data) - set(field_types))
     if unknown:
-        raise InputError(f"task '{path}': unknown key(s) {', '.join(unknown)} (known: {', '.join(FIELD_TYPES)})")
-    for key, kind in FIELD_TYPES.items():
+        raise InputError(f"task '{path}': unknown key(s) {', '.join(unknown)} (known: {', '.join(field_types)})")
+    for key, kind in field_types.items():
         if key in data and (not isinstance(data[key], kind) or isinstance(data[key], bool)):
             raise InputError(f"task '{path}': {key} = {data[key]!r} must be a {kind.__name__}")
+    return data
+
+
+def is_bin_task(name: str) -> bool:
+    """Whether a task names a cluttered-bin task (`scene = "bin"`, suctionbench.clutter.tasks)."""
+    try:
+        path = task_path(name)
+        return tomllib.loads(path.read_text()).get("scene") == "bin"
+    except (InputError, OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return False  # load_task names the problem
+
+
+def load_task(name: str) -> Task:
+    """A shipped task by name, or a task TOML file by path; InputError naming the file and the key
+    for anything malformed: not UTF-8 TOML, unknown keys, wrong types, values out of range."""
+    from suctionbench.contact.metrics import METRICS
+    from suctionbench.sim.pick import PLACEMENTS
+    from suctionbench.validate import COUNT_MAX, OPTION_RULES
+
+    path = task_path(name)
+    data = read_task_toml(path, FIELD_TYPES)
     if "set" not in data:
         raise InputError(f"task '{path}': no 'set' (the object set the trials draw from)")
     if "trials" not in data:

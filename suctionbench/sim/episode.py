@@ -178,7 +178,8 @@ class _Unstable(Exception):
 
 
 class _Failure(Exception):
-    """Raised inside the episode to end it with a failure reason."""
+    """Raised inside the episode to end it with a failure reason (args: the reason, and optionally
+    a detail for the result's `detail`, e.g. what collided)."""
 
 
 class PickEpisode:
@@ -200,10 +201,7 @@ class PickEpisode:
         kp = self.model.actuator_gainprm[self.arm_act, 0]
         self._velocity_lead = -self.model.actuator_biasprm[self.arm_act, 2] / kp
         self.speed = np.array([JOINT_SPEED_LIMITS[j] for j in RIGHT_ARM_JOINTS]) * config.speed_scale
-        self.object = self.model.body(scene.object_body).id
-        self.object_qpos = self.model.jnt_qposadr[self.model.body_jntadr[self.object]]
-        object_dof = self.model.jnt_dofadr[self.model.body_jntadr[self.object]]
-        self.object_dofs = slice(object_dof, object_dof + 6)
+        self.set_target(self.model.body(scene.object_body).id)
         self.data_ik = mujoco.MjData(self.model)
         """Scratch state for IK (the solver restores it), kept at the robot's home pose."""
         self.data_ik.qpos[:] = scene.home_qpos
@@ -221,6 +219,14 @@ class PickEpisode:
         self.record_every = 10
 
     # -- set-up ---------------------------------------------------------------------------------
+    def set_target(self, body: int) -> None:
+        """Make `body` (a free object body's id) the object the pick is about: the one whose seal,
+        lift, transport and rest the episode judges (a scene with several objects retargets)."""
+        self.object = int(body)
+        self.object_qpos = self.model.jnt_qposadr[self.model.body_jntadr[self.object]]
+        object_dof = self.model.jnt_dofadr[self.model.body_jntadr[self.object]]
+        self.object_dofs = slice(object_dof, object_dof + 6)
+
     def _robot_geoms(self) -> np.ndarray:
         """Per geom (ngeom,) bool: whether it belongs to the arm links (not the cup), for collision checks."""
         names = [mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_GEOM, g) or "" for g in range(self.model.ngeom)]
@@ -264,19 +270,24 @@ class PickEpisode:
         except _Unstable as exc:
             self.placement_error = f"during placement: {exc}"
 
-    def settle(self, step: Any) -> bool:
-        """Call `step()` (one simulation step) until the object has come to rest (it stayed within
-        `rest_motion` of one pose for `rest_time`), at most `settle_time`; True if it came to rest.
-        The placement and the gymnasium environment's re-settling share this rule."""
+    def settle(self, step: Any, bodies: Any = None) -> bool:
+        """Call `step()` (one simulation step) until the object (or every free body of `bodies`,
+        ids) has come to rest (stayed within `rest_motion` of one pose for `rest_time`), at most
+        `settle_time`; True if it came to rest. The placement, the gymnasium environment's
+        re-settling and the cluttered bin's drops share this rule."""
         c, dt = self.config, self.model.opt.timestep
         window = max(1, round(c.rest_time / dt))
-        qpos = slice(self.object_qpos, self.object_qpos + 7)
+        ids = [self.object] if bodies is None else list(bodies)
+        adr = np.array([self.model.jnt_qposadr[self.model.body_jntadr[b]] for b in ids], dtype=int)
+        qpos = adr[:, None] + np.arange(7)  # (B, 7): position and quaternion of each body
         mark, still = self.data.qpos[qpos].copy(), 0
         for _ in range(int(c.settle_time / dt)):
             step()
             now = self.data.qpos[qpos]
-            turn = 2.0 * np.arccos(min(1.0, abs(float(now[3:] @ mark[3:]))))  # unit quaternions
-            if np.linalg.norm(now[:3] - mark[:3]) < c.rest_motion and turn * REST_LEVER < c.rest_motion:
+            dots = np.minimum(1.0, np.abs(np.einsum("bk,bk->b", now[:, 3:], mark[:, 3:])))  # unit quaternions
+            turn = 2.0 * np.arccos(dots)
+            moved = np.linalg.norm(now[:, :3] - mark[:, :3], axis=1)
+            if np.all(moved < c.rest_motion) and np.all(turn * REST_LEVER < c.rest_motion):
                 still += 1
                 if still >= window:
                     return True
@@ -287,8 +298,12 @@ class PickEpisode:
     def _object_radius(self) -> float:
         """Radius of a sphere about the object's body origin that contains its surface mesh."""
         m = self.model
-        g = m.geom(f"{self.scene.object_body}_visual").id
+        g = self.visual_geom(self.object)
         return float(np.linalg.norm(m.geom_pos[g]) + m.geom_rbound[g])
+
+    def visual_geom(self, body: int) -> int:
+        """Id of the surface-mesh geom of an object body (`objects.mjcf.add_object_body`)."""
+        return self.model.geom(f"{self.model.body(body).name}_visual").id
 
     def _ready_configuration(self) -> np.ndarray:
         """Arm configuration with the tool tip at `ready_tip`, pointing down (cached)."""
@@ -422,7 +437,7 @@ class PickEpisode:
             pre = point - c.pregrasp_offset * approach
             standoff = point - c.guarded_standoff * approach
             self._ik(pre, approach, q0)  # unreachable grasps fail before the arm moves
-            lift_end = point + np.array([0.0, 0.0, c.lift_height])
+            lift_end = self._lift_end(point)
             bx, by = self.scene.config.bin_centre
             above_bin = np.array([bx, by, c.transport_height])
 
@@ -443,7 +458,7 @@ class PickEpisode:
             q_contact = d.qpos[self.arm_qpos].copy()
             self.cup.commanded = True
             self._run(np.array([q_contact, q_contact]), c.vacuum_dwell)
-            if self.cup.sealed < 0 or self.cup.sealed != self.object:
+            if self.cup.sealed < 0 or not self._take_seal(self.cup.sealed):
                 raise _Failure("no_seal")
             seal_time = d.time - start_sim
             grip = self._object_in_tip_frame()
@@ -482,7 +497,7 @@ class PickEpisode:
             self.cup.commanded = False
             self._run(np.array([q_bin, q_bin]), c.release_time)
         except _Failure as exc:
-            failure = str(exc)
+            failure, detail = exc.args[0], (exc.args[1] if len(exc.args) > 1 else None)
             self._motion = None
         except _Unstable as exc:
             failure, valid, detail = "unstable", False, str(exc)
@@ -494,6 +509,19 @@ class PickEpisode:
             wall_time=time.perf_counter() - start_wall, detail=detail, phases=phases,
             peak_acceleration=self._peak_accelerations(),
         )
+
+    def _take_seal(self, body: int) -> bool:
+        """Whether the cup's seal on `body` starts the lift: only on the target object here (a
+        scene with several objects lifts whichever object the cup holds)."""
+        return body == self.object
+
+    def _lift_end(self, point: np.ndarray) -> np.ndarray:
+        """Where the straight lift from the grasp `point` ends: `lift_height` above it."""
+        return point + np.array([0.0, 0.0, self.config.lift_height])
+
+    def _hover_height(self) -> float:
+        """Lowest height (m) of the transit's hover point: `transit_clearance` over the object's top."""
+        return float(self._object_z().max()) + self.config.transit_clearance
 
     @property
     def motion(self) -> str | None:
@@ -544,9 +572,9 @@ class PickEpisode:
         `EpisodeConfig.transit_clearance` above the object's top; a turn there to the approach's
         orientation; a straight descent to `pre`. (A joint-space move from the ready pose dipped
         the tool tip to 5 cm above the table on its way.) Returns the arm configuration at `pre`."""
-        c, down = self.config, np.array([0.0, 0.0, -1.0])
+        down = np.array([0.0, 0.0, -1.0])
         start = self._tip_at(q0)
-        hover = np.array([pre[0], pre[1], max(pre[2], self._object_z().max() + c.transit_clearance)])
+        hover = np.array([pre[0], pre[1], max(pre[2], self._hover_height())])
         across = self._line(start, hover, down, q0, step=0.02)
         self._run(across, self._duration(across, 0.5))
         q_turn = self._ik(hover, approach, across[-1])
@@ -555,10 +583,10 @@ class PickEpisode:
         self._run(descent, self._duration(descent, 0.3))
         return descent[-1]
 
-    def _object_z(self) -> np.ndarray:
-        """World heights of the object's surface mesh vertices."""
+    def _object_z(self, body: int | None = None) -> np.ndarray:
+        """World heights of the surface mesh vertices of the object (or of object `body`)."""
         m, d = self.model, self.data
-        g = m.geom(f"{self.scene.object_body}_visual").id
+        g = self.visual_geom(self.object if body is None else body)
         mesh = m.geom_dataid[g]
         verts = m.mesh_vert[m.mesh_vertadr[mesh] : m.mesh_vertadr[mesh] + m.mesh_vertnum[mesh]]
         return d.geom_xpos[g][2] + verts @ d.geom_xmat[g].reshape(3, 3)[2]
@@ -578,8 +606,14 @@ class PickEpisode:
         if n == 0:
             return
         geoms = d.contact.geom[:n]
-        if np.any((d.contact.dist[:n] < 0) & (self._is_robot[geoms[:, 0]] | self._is_robot[geoms[:, 1]])):
-            raise _Failure("collision")
+        hit = (d.contact.dist[:n] < 0) & (self._is_robot[geoms[:, 0]] | self._is_robot[geoms[:, 1]])
+        if np.any(hit):
+            raise _Failure("collision", self.contact_names(geoms[np.argmax(hit)]))
+
+    def contact_names(self, pair: np.ndarray) -> str:
+        """"A - B": the bodies of a contact's two geoms (a collision failure's detail)."""
+        m = self.model
+        return " - ".join(m.body(int(m.geom_bodyid[g])).name for g in pair)
 
 
 def min_jerk_path(waypoints: np.ndarray, times: np.ndarray) -> np.ndarray:

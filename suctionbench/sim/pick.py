@@ -91,12 +91,42 @@ _POLICY_CACHE: dict[tuple[str, str | None, str], Any] = {}
 """Image policies by (spec, model directory, options), built once per process."""
 
 
+def cached_policy(spec: str, model: str | None, options: dict[str, Any]) -> Any:
+    """The image policy a spec names with `options` (and the GQ-CNN `model` for the policies that
+    read one), built once per process: policies are stateless between plans, models load once."""
+    from suctionbench.policies.base import MODEL_POLICIES, make_policy
+    from suctionbench.policies.plugins import canonical_spec
+
+    key = (spec, model, repr(sorted(options.items())))
+    if key not in _POLICY_CACHE:
+        kwargs = dict(options)
+        if canonical_spec(spec) in MODEL_POLICIES and model:
+            kwargs["model"] = model
+        _POLICY_CACHE[key] = make_policy(spec, **kwargs)
+    return _POLICY_CACHE[key]
+
+
 def _pose(position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
     """4x4 transform from a position and a flat 3x3 rotation."""
     pose = np.eye(4)
     pose[:3, :3] = np.asarray(rotation).reshape(3, 3)
     pose[:3, 3] = position
     return pose
+
+
+def grasp_labels(mesh: Any, com: np.ndarray, mass: float, cup: CupConfig, point: np.ndarray, approach: np.ndarray,
+                 seed: int) -> dict[str, Any]:
+    """The label fields of a trial record (`NO_LABELS`' keys) for one world grasp on an object
+    whose world mesh, centre of mass and mass are given, labelled for the pick episode's loads."""
+    labeller = SuctionLabeller(mesh, LabelConfig.for_episode(cup), mass=mass, com=com)
+    labels = labeller.label(np.asarray(point)[None], np.asarray(approach)[None], seed, metrics=tuple(METRICS))
+    return {
+        "label_seal": bool(labels.seal.seal[0]),
+        "label_seal_failure": labels.seal.failure_names[0],
+        "label_wr": bool(labels.wr[0]),
+        "label_rwr": float(labels.rwr[0]),
+        "label_scores": {name: float(labels.score(name)[0]) for name in METRICS},
+    }
 
 
 class PickRunner:
@@ -227,15 +257,7 @@ class PickRunner:
         The disturbing wrench includes the inertial load of the episode's peak acceleration."""
         if mesh is None:
             mesh, com = self.posed_object()
-        labeller = SuctionLabeller(mesh, LabelConfig.for_episode(self.request.cup), mass=self.record.mass, com=com)
-        labels = labeller.label(point[None], approach[None], self.request.seed, metrics=tuple(METRICS))
-        return {
-            "label_seal": bool(labels.seal.seal[0]),
-            "label_seal_failure": labels.seal.failure_names[0],
-            "label_wr": bool(labels.wr[0]),
-            "label_rwr": float(labels.rwr[0]),
-            "label_scores": {name: float(labels.score(name)[0]) for name in METRICS},
-        }
+        return grasp_labels(mesh, com, self.record.mass, self.request.cup, point, approach, self.request.seed)
 
     def observe(self) -> Any:
         """The policy's view: the overhead depth image (with sensor noise), the camera, and the
@@ -259,17 +281,9 @@ class PickRunner:
     def _plan_from_image(self) -> Any:
         """Run an image policy from the registry on the current observation (world-frame result)."""
         from suctionbench.policies.analytic import RankedGrasp
-        from suctionbench.policies.base import MODEL_POLICIES, make_policy
-        from suctionbench.policies.plugins import canonical_spec
 
         req = self.request
-        key = (req.policy, req.model, repr(sorted(req.policy_args.items())))
-        if key not in _POLICY_CACHE:  # policies are stateless between plans; models load once per process
-            kwargs = dict(req.policy_args)
-            if canonical_spec(req.policy) in MODEL_POLICIES and req.model:
-                kwargs["model"] = req.model
-            _POLICY_CACHE[key] = make_policy(req.policy, **kwargs)
-        policy = _POLICY_CACHE[key]
+        policy = cached_policy(req.policy, req.model, req.policy_args)
         start = time.perf_counter()
         self.observation = self.observe()
         self._sensing_time = time.perf_counter() - start

@@ -1,9 +1,11 @@
 """The pick scene: YuMi on a table, suction tool on the right flange, a receptacle bin at the
 side, one object, and an overhead depth camera. Assembled with MjSpec from assets/yumi/yumi.xml,
-the object's record and the shared cup configuration."""
+the object's record and the shared cup configuration. `assemble_scene` builds the same workspace
+around several objects and extra world geometry (the cluttered bin, `suctionbench.clutter.scene`)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import mujoco
@@ -76,6 +78,12 @@ class Scene:
     """Full-length qpos of the robot's home pose (other joints at their defaults)."""
     home_ctrl: np.ndarray
     """Full-length ctrl matching home_qpos (vacuum off)."""
+    object_bodies: tuple[str, ...] = ()
+    """Every object body of the scene, in the order they were given (one: `object_body`)."""
+
+    def __post_init__(self) -> None:
+        if not self.object_bodies:
+            self.object_bodies = (self.object_body,)
 
 
 def build_scene(
@@ -88,6 +96,29 @@ def build_scene(
     config: SceneConfig | None = None,
 ) -> Scene:
     """Assemble and compile the scene for one object (placed later by the episode)."""
+    return assemble_scene([record], cup, intrinsics, camera_pose, sim_cup=sim_cup, config=config)
+
+
+def assemble_scene(
+    records: Sequence[ObjectRecord],
+    cup: CupConfig,
+    intrinsics: CameraIntrinsics,
+    camera_pose: np.ndarray,
+    *,
+    sim_cup: SimCupConfig | None = None,
+    config: SceneConfig | None = None,
+    names: Sequence[str] | None = None,
+    add_world: Callable[[mujoco.MjsBody, dict], None] | None = None,
+    floating: bool = False,
+) -> Scene:
+    """Assemble and compile the workspace with one body per record (named `names`, default
+    "object" for one record, "object_00", "object_01", ... for several; all placed later by the
+    episode), and whatever `add_world(worldbody, contact_options)` adds to the world (fixed
+    geometry sharing the table's contact options)."""
+    if not records:
+        raise ValueError("assemble_scene: no object records")
+    if names is None:
+        names = ["object"] if len(records) == 1 else [f"object_{i:02d}" for i in range(len(records))]
     sim_cup = sim_cup or SimCupConfig()
     config = config or SceneConfig()
     spec = load_yumi_spec()
@@ -106,9 +137,13 @@ def build_scene(
         pos=[config.table_centre_x, 0.0, -tz / 2], rgba=[0.55, 0.45, 0.35, 1], **env,
     )
     _add_bin(world, config, env)
+    if add_world is not None:
+        add_world(world, env)
     cx, cy = config.workspace_centre
-    body = add_object_body(spec, record, name="object", pos=(cx, cy, 0.3))
-    expose_to_vacuum(body)
+    for i, (record, name) in enumerate(zip(records, names, strict=True)):
+        body = add_object_body(spec, record, name=name, pos=(cx, cy, 0.3 + 0.3 * i))
+        body.gravcomp = 1.0 if floating else 0.0
+        expose_to_vacuum(body)
     flange = spec.site(RIGHT_FLANGE_SITE)
     handles = add_suction_tool(
         spec.body(FLANGE_BODY), spec, cup, sim_cup, prefix="cup", pos=list(flange.pos), quat=list(flange.quat)
@@ -123,8 +158,9 @@ def build_scene(
         home_qpos[model.jnt_qposadr[model.joint(joint).id]] = value
         home_ctrl[model.actuator(joint).id] = value
     return Scene(
-        model=model, cup=handles, object_body="object", camera="overhead", intrinsics=intrinsics,
+        model=model, cup=handles, object_body=names[0], camera="overhead", intrinsics=intrinsics,
         camera_pose=np.asarray(camera_pose, dtype=float), config=config, home_qpos=home_qpos, home_ctrl=home_ctrl,
+        object_bodies=tuple(names),
     )
 
 
@@ -142,14 +178,22 @@ def _home_by_joint_name(spec: mujoco.MjSpec) -> dict[str, float]:
 
 
 def _add_bin(world: mujoco.MjsBody, config: SceneConfig, env: dict) -> None:
-    """An open box of five thin walls standing on the table."""
-    (bx, by), (w, d, h), t = config.bin_centre, config.bin_size, config.bin_wall
+    """The receptacle: an open box of five thin walls standing on the table."""
+    add_open_box(world, "bin", config.bin_centre, config.bin_size, config.bin_wall, env, rgba=(0.2, 0.5, 0.3, 1))
+
+
+def add_open_box(world: mujoco.MjsBody, prefix: str, centre: Sequence[float], size: Sequence[float], wall: float,
+                 env: dict, rgba: Sequence[float]) -> None:
+    """An open box standing on the table: a floor of thickness `wall` (inner floor at z = wall)
+    and four walls of that thickness around the inner `size` (width, depth, wall height), geoms
+    named PREFIX_floor, PREFIX_wall_xp, _xn, _yp, _yn."""
+    (bx, by), (w, d, h), t = centre, size, wall
     walls = {
-        "bin_floor": ([w / 2 + t, d / 2 + t, t / 2], [bx, by, t / 2]),  # inner floor at z = t
-        "bin_wall_xp": ([t / 2, d / 2 + t, h / 2], [bx + w / 2 + t / 2, by, h / 2]),
-        "bin_wall_xn": ([t / 2, d / 2 + t, h / 2], [bx - w / 2 - t / 2, by, h / 2]),
-        "bin_wall_yp": ([w / 2, t / 2, h / 2], [bx, by + d / 2 + t / 2, h / 2]),
-        "bin_wall_yn": ([w / 2, t / 2, h / 2], [bx, by - d / 2 - t / 2, h / 2]),
+        f"{prefix}_floor": ([w / 2 + t, d / 2 + t, t / 2], [bx, by, t / 2]),
+        f"{prefix}_wall_xp": ([t / 2, d / 2 + t, h / 2], [bx + w / 2 + t / 2, by, h / 2]),
+        f"{prefix}_wall_xn": ([t / 2, d / 2 + t, h / 2], [bx - w / 2 - t / 2, by, h / 2]),
+        f"{prefix}_wall_yp": ([w / 2, t / 2, h / 2], [bx, by + d / 2 + t / 2, h / 2]),
+        f"{prefix}_wall_yn": ([w / 2, t / 2, h / 2], [bx, by - d / 2 - t / 2, h / 2]),
     }
-    for name, (size, pos) in walls.items():
-        world.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=size, pos=pos, rgba=[0.2, 0.5, 0.3, 1], **env)
+    for name, (half, pos) in walls.items():
+        world.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=half, pos=pos, rgba=list(rgba), **env)

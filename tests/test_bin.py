@@ -1,0 +1,233 @@
+"""Bin picking in clutter (suctionbench.clutter): bin tasks, depth segmentation, the cup's path
+check, filling the bin, the bin benchmark from the CLI, and the SuctionBin-v0 environment."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import gymnasium
+import mujoco
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+from typer.testing import CliRunner
+
+import suctionbench  # noqa: F401  (registers the environments)
+from suctionbench.cli import app
+from suctionbench.clutter.planning import path_is_clear
+from suctionbench.clutter.tasks import BinTask, load_bin_task
+from suctionbench.errors import InputError
+from suctionbench.evaluation.tasks import is_bin_task
+from suctionbench.sensing.camera import CameraIntrinsics
+from suctionbench.sensing.segmentation import segment_regions
+
+SHIPPED = ("bin-smoke", "bin-basic", "bin-typical", "bin-mixed")
+
+
+# -- tasks ------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("name", SHIPPED)
+def test_shipped_bin_tasks_load(name):
+    task = load_bin_task(name)
+    assert is_bin_task(name)
+    assert 1 <= task.objects[0] <= task.objects[1] <= 15
+    assert task.max_failures >= 1
+
+
+def test_single_object_tasks_are_not_bin_tasks():
+    assert not is_bin_task("basic") and not is_bin_task("smoke")
+
+
+def test_bin_draw_is_seeded_and_in_range():
+    task = BinTask(name="t", sets=("basic",), objects=(5, 8), trials=3)
+    available = [f"basic/o{i}" for i in range(30)]
+    draws = [task.draw(i, available) for i in range(20)]
+    assert draws == [task.draw(i, available) for i in range(20)]  # the same bins for every policy
+    assert all(5 <= len(d) <= 8 and len(set(d)) == len(d) for d in draws)  # distinct objects
+    assert len({tuple(d) for d in draws}) > 1
+
+
+@pytest.mark.parametrize("text, problem", [
+    ('scene = "bin"\nsets = ["basic"]\nobjects = [5, 3]\ntrials = 1\n', "objects"),
+    ('scene = "bin"\nsets = []\nobjects = [1, 3]\ntrials = 1\n', "sets"),
+    ('scene = "bin"\nsets = ["basic"]\nobjects = [1, 3]\ntrials = 1\nbogus = 2\n', "bogus"),
+    ('scene = "bin"\nsets = ["basic"]\nobjects = [1, 3]\n', "trials"),
+    ('sets = ["basic"]\nobjects = [1, 3]\ntrials = 1\n', "not a bin task"),
+])
+def test_malformed_bin_tasks_are_named(tmp_path, text, problem):
+    path = tmp_path / "t.toml"
+    path.write_text(text)
+    with pytest.raises(InputError, match=problem):
+        load_bin_task(str(path))
+
+
+# -- segmentation -----------------------------------------------------------------------------------
+CAMERA = CameraIntrinsics(name="test", fx=500.0, fy=500.0, cx=80.0, cy=60.0, width=160, height=120,
+                          min_depth=0.2, max_depth=2.0)
+
+
+def _scene_depth(blocks):
+    """Depth image (camera looking straight down from 0.6 m onto a floor) of axis-aligned blocks
+    given as (x0, x1, y0, y1, height, tilt): a top face at `height` above the floor over
+    [x0, x1] x [y0, y1] (camera-frame metres), tilted about the camera's y axis by `tilt` rad
+    through its centre. Each pixel's ray meets the first top face or the floor."""
+    v, u = np.mgrid[0:CAMERA.height, 0:CAMERA.width].astype(float)
+    rx, ry = (u - CAMERA.cx) / CAMERA.fx, (v - CAMERA.cy) / CAMERA.fy
+    depth = np.full(u.shape, 0.6)
+    for x0, x1, y0, y1, height, tilt in blocks:
+        xc = 0.5 * (x0 + x1)
+        # the plane z = (0.6 - height) - tan(tilt) (x - xc), met by the ray (rx z, ry z, z)
+        z = (0.6 - height + math.tan(tilt) * xc) / (1.0 + math.tan(tilt) * rx)
+        x, y = rx * z, ry * z
+        inside = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1) & (z < depth)
+        depth[inside] = z[inside]
+    return depth.astype(np.float32)
+
+
+def test_segmentation_separates_stacked_and_side_by_side_objects():
+    # Three objects: two side by side at the same height but touching along an edge with faces
+    # 60 deg apart (a crease, no depth step), and one on its own 2 cm higher (a depth step of
+    # 2 cm > the 8 mm jump threshold).
+    blocks = [
+        (-0.05, 0.0, -0.03, 0.03, 0.05, math.radians(30)),
+        (0.0, 0.05, -0.03, 0.03, 0.05, math.radians(-30)),
+        (-0.03, 0.03, 0.035, 0.05, 0.07, 0.0),
+    ]
+    depth = _scene_depth(blocks)
+    workspace = depth < 0.6 - 0.005  # above the floor
+    regions = segment_regions(depth, CAMERA, workspace)
+    assert len(regions) == 3
+    assert not np.any(np.sum(regions, axis=0) > 1)  # disjoint
+
+
+def test_segmentation_keeps_one_flat_face_whole_under_noise():
+    depth = _scene_depth([(-0.05, 0.05, -0.04, 0.04, 0.05, 0.0)])
+    noisy = depth + np.random.default_rng(0).normal(0.0, 0.0012, depth.shape).astype(np.float32)  # PrimeSense-like
+    regions = segment_regions(noisy, CAMERA, depth < 0.595)
+    assert len(regions) == 1
+    assert regions[0].sum() > 0.9 * (depth < 0.595).sum()
+
+
+# -- the cup's path ---------------------------------------------------------------------------------
+def _shelf_model():
+    """A 10 cm block on the floor, and a plate 10 cm above its left half (an overhang)."""
+    xml = """<mujoco><worldbody>
+      <body name="block" pos="0 0 0.05"><freejoint/><geom type="box" size="0.05 0.05 0.05" group="5"/></body>
+      <body name="plate" pos="-0.03 0 0.2"><freejoint/><geom type="box" size="0.03 0.05 0.005" group="5"/></body>
+    </worldbody></mujoco>"""
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    return model, data
+
+
+def test_path_check_sees_an_overhang_but_not_the_target():
+    model, data = _shelf_model()
+    block = model.body("block").id
+    down = np.array([0.0, 0.0, -1.0])
+    # Under the plate (x = -0.03): the plate's underside is 9.3 cm above the ray's start, beyond the
+    # cup's 8 cm but within the wrist ring's 25 cm, so the wrist would hit it.
+    assert not path_is_clear(model, data, np.array([-0.03, 0.0, 0.1]), down, block, 0.01, 0.08)
+    # At x = 0.045 every ray (cup ring x in [0.035, 0.055], wrist ring x in [0.01, 0.08]) passes
+    # beside the plate, which ends at x = 0.
+    assert path_is_clear(model, data, np.array([0.045, 0.0, 0.1]), down, block, 0.01, 0.08)
+    # With the wrist ring inside the plate's span (x = 0.03: ring down to x = -0.005) it is not clear.
+    assert not path_is_clear(model, data, np.array([0.03, 0.0, 0.1]), down, block, 0.01, 0.08)
+    # The target itself never blocks (its own faces are excluded).
+    assert path_is_clear(model, data, np.array([0.045, 0.0, 0.1]), down, block, 0.01, 0.3)
+
+
+# -- filling the bin --------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def smoke_runner():
+    from suctionbench.clutter.runner import BinRequest, BinRunner
+
+    runner = BinRunner(BinRequest(load_bin_task("bin-smoke"), trial=0, policy="centroid"))
+    runner.episode.reset(np.random.default_rng((0, 0, 0)))
+    return runner
+
+
+def test_filled_bin_holds_every_object_at_rest_inside(smoke_runner):
+    ep = smoke_runner.episode
+    assert ep.placement_error is None
+    assert len(ep.present) + len(ep.spilled) == 3 and len(ep.present) >= 2
+    for body in ep.present:
+        com = ep.data.xipos[body]
+        assert ep.bin.contains(com[:2])
+        assert ep.bin.floor < float(ep._object_z(body).min()) + 0.002  # on or above the floor, not through it
+
+
+def test_parked_objects_float_in_place(smoke_runner):
+    # A parked object has gravity compensated and no contacts: with no force on it, it keeps its
+    # pose exactly (to integration round-off) over a second of simulation.
+    ep = smoke_runner.episode
+    body = ep.present[-1]
+    ep._park(body)
+    mujoco.mj_forward(ep.model, ep.data)
+    before = ep.data.xpos[body].copy()
+    for _ in range(500):
+        mujoco.mj_step(ep.model, ep.data)
+    assert np.linalg.norm(ep.data.xpos[body] - before) < 1e-9
+    ep._unpark(body)
+
+
+def test_observation_regions_lie_inside_the_bin_mask(smoke_runner):
+    observation, regions = smoke_runner.observe(0)
+    assert regions
+    for region in regions:
+        assert np.all(observation.mask[region])
+
+
+# -- the benchmark, end to end ----------------------------------------------------------------------
+@pytest.mark.parametrize("policy", ["planarity-centroid", "gqcnn", "fc-gqcnn", "analytic"])
+def test_bin_smoke_eval_from_the_cli(tmp_path, policy):
+    out = tmp_path / "run"
+    result = CliRunner().invoke(app, ["eval", "--task", "bin-smoke", "--policy", policy, "--out", str(out),
+                                      "--workers", "1", "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout.strip().splitlines()[-1])
+    run = json.loads((out / "run.json").read_text())
+    assert (out / "bins" / "bin_0000.mcap").stat().st_size > 0
+    (record,) = run["bins"]
+    attempts = record["attempts"]
+    assert attempts and summary["metrics"]["attempts"] == len(attempts)
+    assert record["transported"] == sum(len(a["transported"]) for a in attempts)
+    # An attempt succeeds exactly when the object the cup held reached the receptacle alone.
+    for a in attempts:
+        if a["success"]:
+            assert a["transported"] == [a["held"]]
+    # The episode ended for the reason it gives.
+    if record["ended"] == "clear":
+        assert attempts[-1]["remaining"] == 0
+    if record["ended"] == "failures":
+        assert not any(a["success"] for a in attempts[-2:])
+
+
+def test_bin_eval_rejects_bad_masks_and_writes_nothing(tmp_path):
+    out = tmp_path / "run"
+    result = CliRunner().invoke(app, ["eval", "--task", "bin-smoke", "--policy", "centroid", "--out", str(out),
+                                      "--masks", "bogus", "--json"])
+    assert result.exit_code == 2
+    assert "--masks" in json.loads(result.stdout.strip().splitlines()[-1])["error"]
+    assert not out.exists()
+
+
+# -- the environment --------------------------------------------------------------------------------
+def test_bin_env_passes_gymnasium_checker_and_is_seeded():
+    env = gymnasium.make("suctionbench/SuctionBin-v0", task="bin-smoke")
+    with pytest.warns(UserWarning):  # the checker's advice on unbounded boxes; not errors
+        check_env(env.unwrapped, skip_render_check=True)
+    a, info_a = env.reset(seed=5)
+    b, info_b = env.reset(seed=5)
+    assert info_a == info_b
+    assert all(np.array_equal(a[k], b[k]) for k in a)
+    env.close()
+
+
+def test_bin_env_invalid_action_costs_an_attempt_and_moves_nothing():
+    env = gymnasium.make("suctionbench/SuctionBin-v0", task="bin-smoke")
+    obs, _ = env.reset(seed=1, options={"trial": 0})
+    after, reward, terminated, truncated, info = env.step(np.zeros(6, dtype=np.float32))
+    assert reward == 0.0 and info["failure"] == "invalid_action" and info["failures_in_row"] == 1
+    assert not truncated
+    env.close()

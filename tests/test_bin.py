@@ -231,3 +231,35 @@ def test_bin_env_invalid_action_costs_an_attempt_and_moves_nothing():
     assert reward == 0.0 and info["failure"] == "invalid_action" and info["failures_in_row"] == 1
     assert not truncated
     env.close()
+
+
+# -- data in clutter --------------------------------------------------------------------------------
+def test_generate_bin_scene_writes_seeded_cluttered_datapoints(tmp_path):
+    from suctionbench.dataset.storage import DatasetReader
+
+    def generate(out):
+        result = CliRunner().invoke(app, ["generate", "--objects", "basic", "--datapoints", "150", "--scene", "bin",
+                                          "--out", str(out), "--workers", "1", "--json"])
+        assert result.exit_code == 0, result.output
+        return DatasetReader(out)
+
+    a, b = generate(tmp_path / "a"), generate(tmp_path / "b")
+    assert 0 < a.num_datapoints <= 150 and a.num_datapoints == b.num_datapoints
+    fields = ("robust_suction_wrench_resistance", "hand_poses", "object_labels", "object_context")
+    first, second = ({name: r.field(name) for name in fields} for r in (a, b))
+    for name in fields:
+        assert np.array_equal(first[name], second[name]), name  # same seed, same data
+    rwr = first["robust_suction_wrench_resistance"]
+    assert np.all((rwr >= 0) & (rwr <= 1))
+    from suctionbench.objects.registry import list_objects
+
+    n_basic = len(list_objects("basic"))
+    assert np.all((first["object_labels"] >= 0) & (first["object_labels"] < n_basic))
+    # Grasps come from several objects of the bin, seen at their pixels inside the image.
+    assert len(np.unique(first["object_labels"])) > 1
+
+
+def test_generate_rejects_an_unknown_scene(tmp_path):
+    result = CliRunner().invoke(app, ["generate", "--objects", "basic", "--datapoints", "10", "--scene", "heap",
+                                      "--out", str(tmp_path / "d"), "--json"])
+    assert result.exit_code == 2 and "--scene" in json.loads(result.stdout.strip().splitlines()[-1])["error"]

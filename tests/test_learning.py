@@ -515,6 +515,22 @@ def test_same_seed_same_model(dataset, tmp_path):
     assert not torch.equal(weights_of(tmp_path / "a")[key], weights_of(tmp_path / "c")[key])
 
 
+def test_init_starts_from_the_given_model(dataset, tmp_path):
+    # Fine-tuning: with a vanishing learning rate (1e-12) and no weight decay, SGD moves no weight
+    # measurably, so a run started from model A ends with A's weights (and A's normalisation);
+    # a run from random weights does not.
+    train(dataset, tmp_path / "a", TrainConfig(epochs=1, seed=3, **FAST))
+    still = {"learning_rate": 1e-12, "weight_decay": 0.0, "momentum": 0.0}
+    train(dataset, tmp_path / "tuned", TrainConfig(epochs=1, seed=4, init=str(tmp_path / "a"), **still, **FAST))
+    train(dataset, tmp_path / "fresh", TrainConfig(epochs=1, seed=4, **still, **FAST))
+    a, tuned, fresh = (weights_of(tmp_path / n) for n in ("a", "tuned", "fresh"))
+    for name in a:
+        assert torch.allclose(a[name], tuned[name], atol=1e-9), name
+    assert not torch.allclose(a["merge.fc5.weight"], fresh["merge.fc5.weight"])
+    with pytest.raises(InputError, match="--init"):
+        train(dataset, tmp_path / "wrong", TrainConfig(arch="dn3", epochs=1, init=str(tmp_path / "a")))
+
+
 def test_resume_equals_uninterrupted_run(dataset, tmp_path):
     config = TrainConfig(arch="compact", epochs=3, seed=2, shuffle_shards=2)
     straight = train(dataset, tmp_path / "straight", config)

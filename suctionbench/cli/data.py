@@ -49,6 +49,9 @@ def generate(
     load: Annotated[str, typer.Option(help="Loads the labels test: episode (the pick's inertial load, its "
                                            "arrivals and the touch-down's press: what the benchmark scores) or "
                                            "static (the paper's quasi-static gravity).")] = "episode",
+    scene: Annotated[str, typer.Option(help="table (one object in a stable pose, the paper's) or bin (a cluttered "
+                                            "bin per 1,000 datapoints: grasps labelled on their own object, "
+                                            "0 where the gripper's path meets a neighbour or a wall).")] = "table",
     resume: Annotated[bool, typer.Option(help="Continue an interrupted run with the same configuration.")] = False,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing dataset.")] = False,
     seed: SeedOpt = 0,
@@ -69,7 +72,7 @@ def generate(
         records = resolve_objects(objects)
         config = GenerationConfig(
             datapoints=datapoints, seed=seed, grasps_per_object=grasps_per_object,
-            label=label,
+            label=label, scene=scene,
         )
         start = time.perf_counter()
         with progress_bar(datapoints, "generating", not as_json) as advance:

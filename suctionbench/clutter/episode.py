@@ -349,6 +349,14 @@ class BinEpisode(PickEpisode):
         except Exception as exc:  # noqa: BLE001 - _Unstable
             self.placement_error = f"after the attempt: {exc}"
 
+    def remove(self, body: int) -> None:
+        """Take an object out of the bin (as a pick would) and let the rest settle: how dataset
+        generation shows a network a pile at several stages of its clearing."""
+        self.present.remove(body)
+        self._park(body)
+        mujoco.mj_forward(self.model, self.data)
+        self._retract()
+
     def _qpos_slice(self, body: int) -> slice:
         adr = self.model.jnt_qposadr[self.model.body_jntadr[body]]
         return slice(adr, adr + 7)

@@ -75,32 +75,35 @@ def plan_in_regions(policy: Any, observation: Observation, regions: list[np.ndar
     return best, {"regions": len(regions), "region": index, "region_q": qs, "avoided": len(found) - len(fresh)}
 
 
-WRIST_RING = (0.035, 0.25)
-"""(radius, length) m of the second ring of rays `path_is_clear` casts: the tool's body and the
-YuMi's wrist links behind the cup (about 7 cm across), up to 25 cm back from the grasp."""
+WRIST_RING = (0.035, 0.10, 0.30)
+"""(radius, start, end) m of the second ring of rays `path_is_clear` casts: the YuMi's wrist links
+(about 7 cm across) behind the tool, from the flange (the tool is 10 cm long,
+`sim.cup.SimCupConfig.tool_length`) to 30 cm back from the grasp."""
 
 
 def path_is_clear(model: mujoco.MjModel, data: mujoco.MjData, point: np.ndarray, approach: np.ndarray,
                   target: int, radius: float, length: float, rays: int = 8) -> bool:
     """Whether the gripper's path to a grasp is free: rays back from the grasp along minus the
-    approach - from the axis and the lip's rim circle (`radius`) over `length`, and from the wrist's
-    ring (`WRIST_RING`) - meet no geom but the target body's (static geometry such as walls
-    included)."""
+    approach - from the axis and the lip's rim circle (`radius`) over `length` (the cup and its
+    tool), and from the wrist's ring (`WRIST_RING`) - meet no geom but the target body's (static
+    geometry such as walls included)."""
     approach = np.asarray(approach, float) / np.linalg.norm(approach)
     a = np.cross(approach, [1.0, 0.0, 0.0])
     if np.linalg.norm(a) < 1e-6:
         a = np.cross(approach, [0.0, 1.0, 0.0])
     a /= np.linalg.norm(a)
     b = np.cross(approach, a)
+    back = -approach
     phi = 2.0 * np.pi * np.arange(rays) / rays
     ring = np.outer(np.cos(phi), a) + np.outer(np.sin(phi), b)
-    casts = [(np.asarray(point, float), length)]
-    casts += [(point + radius * r, length) for r in ring] + [(point + WRIST_RING[0] * r, WRIST_RING[1]) for r in ring]
+    point = np.asarray(point, float)
+    wrist_radius, wrist_start, wrist_end = WRIST_RING
+    casts = [(point, length)] + [(point + radius * r, length) for r in ring]
+    casts += [(point + wrist_start * back + wrist_radius * r, wrist_end - wrist_start) for r in ring]
     group = np.zeros(6, dtype=np.uint8)  # world geometry (group 0) and the objects' collision parts; not visual (2)
     group[[0, SURFACE_GROUP]] = 1
-    back = -approach
     geom = np.zeros(1, dtype=np.int32)
-    for start, reach in casts:  # start 2 mm off the surface, towards the gripper
+    for start, reach in casts:  # start 2 mm off, towards the gripper
         dist = mujoco.mj_ray(model, data, start + 0.002 * back, back, group, 1, target, geom)
         if 0 <= dist <= reach:
             return False

@@ -100,6 +100,19 @@ class GenerationConfig:
     and the touch-down's press), so a network learns the verdict it is judged by; the paper's
     quasi-static model is `LabelConfig(cup=...)` (``generate --load static``)."""
 
+    scene: str = "table"
+    """"table": one object per image in a stable pose on the table (the paper's); "bin": a cluttered
+    pick bin per unit (`suctionbench.dataset.clutter`)."""
+
+    bin_objects: tuple[int, int] = (5, 10)
+    """Scene "bin": smallest and largest object count of a bin (the bin tasks' range)."""
+
+    bin_images: int = 4
+    """Scene "bin": images per bin, one object taken out between them."""
+
+    bin_datapoints: int = 1000
+    """Scene "bin": datapoints per bin (the unit's quota)."""
+
 
 @dataclass(frozen=True)
 class Unit:
@@ -110,10 +123,19 @@ class Unit:
     quota: int
 
 
-def plan_units(num_objects: int, datapoints: int) -> list[Unit]:
-    """Split the datapoints as evenly as possible over the objects (one unit each)."""
+SCENES = ("table", "bin")
+"""What `generate --scene` accepts."""
+
+
+def plan_units(num_objects: int, datapoints: int, config: GenerationConfig | None = None) -> list[Unit]:
+    """Split the datapoints as evenly as possible over the objects (one unit each), or, for the
+    "bin" scene, over bins of `bin_datapoints` each (one unit per bin)."""
     if num_objects < 1:
         raise InputError("generate: no objects to generate from")
+    if config is not None and config.scene == "bin":
+        bins = max(1, math.ceil(datapoints / config.bin_datapoints))
+        base, extra = divmod(datapoints, bins)
+        return [Unit(i, base + (1 if i < extra else 0)) for i in range(bins)]
     base, extra = divmod(datapoints, num_objects)
     return [Unit(i, base + (1 if i < extra else 0)) for i in range(num_objects) if base or i < extra]
 
@@ -211,7 +233,8 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
 
 
 def image_object_context(intrinsics: CameraIntrinsics, depth: np.ndarray, noisy: np.ndarray, camera_pose: np.ndarray,
-                         pixels: np.ndarray, exact_points: np.ndarray, approaches: np.ndarray) -> np.ndarray:
+                         pixels: np.ndarray, exact_points: np.ndarray, approaches: np.ndarray,
+                         object_mask: np.ndarray | None = None) -> np.ndarray:
     """The object context (N, 6) of grasps at `pixels` (N, 2) = (u, v) along world `approaches`, as a
     policy planning on the `noisy` image computes it (`policies.gqcnn.network_poses`): the object's
     points and the grasp points both from the noisy image, in the world frame. The object's pixels
@@ -220,11 +243,15 @@ def image_object_context(intrinsics: CameraIntrinsics, depth: np.ndarray, noisy:
     Each grasp point is the noisy image's point at its pixel, rounded as policies plan on whole
     pixels (the mesh point, `exact_points`, where that pixel has no depth). Taken from the mesh
     instead, the grasp point would miss the image's depth scale error (~3 % of the depth: 2 cm at
-    0.6 m), which a policy's grasp point shares with its object points."""
+    0.6 m), which a policy's grasp point shares with its object points. `object_mask`: the object's
+    pixels where the renderer gives them (a cluttered scene's instance mask), instead of the height
+    above the table."""
     from suctionbench.sensing.object_context import object_context
 
     rot, origin = camera_pose[:3, :3], camera_pose[:3, 3]
-    mask = (noisy > 0) & ((intrinsics.deproject(depth) @ rot[2] + origin[2]) > OBJECT_CLEARANCE)
+    if object_mask is None:
+        object_mask = (intrinsics.deproject(depth) @ rot[2] + origin[2]) > OBJECT_CLEARANCE
+    mask = (noisy > 0) & object_mask
     cloud = intrinsics.deproject(noisy)  # camera frame: only the object's and the grasps' pixels are moved
     cols = np.clip(np.rint(pixels[:, 0]).astype(np.intp), 0, noisy.shape[1] - 1)
     rows = np.clip(np.rint(pixels[:, 1]).astype(np.intp), 0, noisy.shape[0] - 1)
@@ -277,8 +304,13 @@ def run_units(
     """Yield (unit, arrays) in unit order, computed by the chosen engine (suctionbench.parallel)."""
     from suctionbench.parallel import map_ordered
 
-    args = [(u, object_dirs[u.index], camera, config) for u in units]
-    results = map_ordered(generate_unit, args, engine=engine, workers=workers, address=address)
+    if config.scene == "bin":
+        from suctionbench.dataset.clutter import generate_bin_unit
+
+        fn, args = generate_bin_unit, [(u, object_dirs, camera, config) for u in units]
+    else:
+        fn, args = generate_unit, [(u, object_dirs[u.index], camera, config) for u in units]
+    results = map_ordered(fn, args, engine=engine, workers=workers, address=address)
     yield from zip(units, results, strict=True)
 
 
@@ -329,7 +361,9 @@ def generate_dataset(
     }
     write_card(out, card, datapoints_per_shard=config.datapoints_per_shard)
 
-    units = plan_units(len(object_dirs), config.datapoints)
+    if config.scene not in SCENES:
+        raise InputError(f"--scene '{config.scene}': unknown (known: {', '.join(SCENES)})")
+    units = plan_units(len(object_dirs), config.datapoints, config)
     todo, corrupt = [], []
     for unit in units:
         try:

@@ -182,6 +182,11 @@ class TrainConfig:
     threshold) or soft (cross-entropy against the metric itself as the probability of the positive
     class). Accuracy and AP are scored against the binary label either way."""
 
+    init: str | None = None
+    """A trained model directory to start from (fine-tuning: its weights and its input
+    normalisation, so the network sees inputs scaled as it learnt them); its arch must be `arch`.
+    None: random initial weights and statistics of this dataset."""
+
     def __post_init__(self) -> None:
         def integer(value: Any, low: int) -> bool:
             return isinstance(value, int | np.integer) and not isinstance(value, bool) and value >= low
@@ -303,6 +308,18 @@ def _device(name: str) -> torch.device:
     if device.type == "cuda" and not torch.cuda.is_available():
         raise InputError(f"device '{name}': CUDA is not available on this machine (use cpu)")
     return device
+
+
+def _initial_model(config: TrainConfig) -> Any:
+    """The model `config.init` names (None without one); InputError if its arch is not `config.arch`."""
+    if config.init is None:
+        return None
+    from suctionbench.learning.checkpoint import load_model
+
+    base = load_model(config.init)
+    if base.arch != config.arch:
+        raise InputError(f"--init '{config.init}': a {base.arch} model; --arch is {config.arch}")
+    return base
 
 
 def _resume_key(config: TrainConfig, card: dict[str, Any], reader: DatasetReader, train_data: SplitData,
@@ -517,7 +534,13 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
         raise InputError(f"output '{out_dir}': holds a training run with a different configuration or dataset "
                          f"(differs in: {changed}); use another output directory or overwrite it (--overwrite)")
 
-    stats = NormStats.from_dict(saved["stats"]) if saved is not None else train_data.compute_stats()
+    base = _initial_model(config) if saved is None else None
+    if base is not None:
+        network.load_state_dict(base.network.state_dict())
+    if saved is not None:
+        stats = NormStats.from_dict(saved["stats"])
+    else:
+        stats = base.stats if base is not None else train_data.compute_stats()
     if stats.image_channels != channels:  # a resume key of the same arch makes this a corrupt state
         raise InputError(f"training checkpoint '{out_dir / STATE_NAME}': normalisation statistics for "
                          f"{stats.image_channels} image channel(s), --arch {config.arch} reads {channels}")

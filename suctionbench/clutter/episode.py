@@ -19,8 +19,8 @@ Failure reasons beyond the single-object episode's (`CLUTTER_FAILURES`)
 - "collision_neighbour": the cup touched an object other than the one under the grasp point on
   the way in, before the bellows met its target, and then did not seal. (Brushing a neighbour is
   common in a pile and harmless when the cup still seals; the arm stops only at a wall.)
-- "two_lifted": another object came out of the bin with the one held (lifted clear of the pile
-  and carried out), whether or not it reached the receptacle.
+- "two_lifted": another object left the bin from the moment the held one was lifted (carried
+  along, stuck to it or dragged over the rim), whether or not it reached the receptacle.
 - "dragged_out": the target left the bin without being carried to the receptacle while it was
   not held (pushed or dragged over the rim); out of reach from then on.
 - "missed_receptacle": the object was held to the end and released, but did not come to rest in
@@ -62,8 +62,7 @@ class BinEpisodeConfig:
     many times, nearer the centre; after that it is left out of the scene (recorded as spilled)."""
 
     carried_height: float = 0.03
-    """Another object counts as carried out with the held one ("two_lifted") when, at the end of the
-    hold over the receptacle, its lowest point is this far (m) above the pick bin's rim."""
+    """The lift raises the held object's lowest point this far (m) above the rim and the pile."""
 
 
 @dataclass
@@ -242,7 +241,7 @@ class BinEpisode(PickEpisode):
         self._retract()
         transported = [b for b in self.present if not self._in_bin(b) and self._over_receptacle(b)]
         lost = [b for b in self.present if not self._in_bin(b) and b not in transported]
-        carried = [b for b in transported + lost if b != held and self._was_carried.get(b, False)]
+        carried = [b for b in transported + lost if b != held and b in (self._in_bin_at_lift or ())]
         failure = result.failure
         if failure is None and carried:
             failure = "two_lifted"
@@ -311,16 +310,14 @@ class BinEpisode(PickEpisode):
             self._brushed = True
 
     def _follow_holding(self, waypoints: np.ndarray, duration: float, grip: np.ndarray) -> tuple[bool, float]:
-        """The episode's carrying motion; also notes which other objects rise over the rim with it."""
-        out = super()._follow_holding(waypoints, duration, grip)
-        rim = self.bin.wall_height + self.bin_episode.carried_height
-        for b in self.present:
-            if b != self.object and float(self._object_z(b).min()) > rim:
-                self._was_carried[b] = True
-        return out
+        """The episode's carrying motion; at the start of the first (the lift) it notes which other
+        objects are in the bin, so that one leaving it from then on left with the held object."""
+        if self._in_bin_at_lift is None:
+            self._in_bin_at_lift = {b for b in self.present if b != self.object and self._in_bin(b)}
+        return super()._follow_holding(waypoints, duration, grip)
 
     def execute(self, point: np.ndarray, approach: np.ndarray) -> EpisodeResult:
-        self._was_carried: dict[int, bool] = {}
+        self._in_bin_at_lift: set[int] | None = None
         self._brushed = False
         result = super().execute(point, approach)
         if result.failure == "no_seal" and self._brushed:  # a neighbour was in the cup's way

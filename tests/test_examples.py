@@ -119,3 +119,22 @@ def test_shipped_depth_example_is_the_scene_render_depth_makes():
     result = plan_grasp(depth, "primesense", policy="planarity-centroid", seed=0)
     assert 5000 < result.observation.mask.sum() < 8000  # the mug, not the bin or the robot
     assert result.plane.inlier_fraction > 0.7 and result.action.approach_world[2] < -0.8
+
+
+def test_bin_loop_clears_part_of_a_smoke_bin():
+    cleared = _module("bin_loop").main(task="bin-smoke", seed=0)
+    assert 0.0 <= cleared <= 1.0
+
+
+def test_policy_plugin_runs_unchanged_on_a_bin(tmp_path):
+    # A plug-in gets the whole bin as its observation's mask (no per-region planning) and plans as it likes.
+    from typer.testing import CliRunner
+
+    from suctionbench.cli import app
+
+    result = CliRunner().invoke(app, ["eval", "--policy", PLUGIN, "--task", "bin-smoke", "--workers", "1",
+                                      "--out", str(tmp_path / "run"), "--json"])
+    assert result.exit_code == 0, result.output
+    run = json.loads((tmp_path / "run" / "run.json").read_text())
+    attempts = run["bins"][0]["attempts"]
+    assert attempts and all(a["region"] is None for a in attempts if a["grasp_world"] is not None)

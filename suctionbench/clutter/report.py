@@ -49,7 +49,7 @@ def bin_sections(run_dirs: list[Path], out: Path) -> dict[str, Any]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from suctionbench.io import atomic_path
+    from suctionbench.evaluation.figures import save_figure, style_axes
 
     runs = sorted(((json.loads((Path(d) / "run.json").read_text()), Path(d)) for d in run_dirs),
                   key=lambda item: _order(item[0]))
@@ -81,18 +81,9 @@ def bin_sections(run_dirs: list[Path], out: Path) -> dict[str, Any]:
         for run, _ in [(r, d) for r, d in runs if r["task"] == task]:
             x, y = clearance_curve(run["bins"])
             ax.step(x, y, where="post", label=_label(run), lw=1.2)
-        ax.set_xlabel("attempts per object in the bin")
-        ax.set_ylabel("share of objects removed")
-        ax.set_ylim(0, 1.02)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
-        ax.set_title(f"{task}: clearance against attempts", fontsize=9)
-        fig.tight_layout()
-        name = f"bin_clearance_{task}.png"
-        with atomic_path(out / name) as tmp:
-            fig.savefig(tmp, format="png", dpi=110)
-        plt.close(fig)
-        figures.append(name)
+        style_axes(ax, "attempts per object in the bin", "share of objects removed",
+                   f"{task}: clearance against attempts")
+        figures.append(save_figure(fig, out, f"bin_clearance_{task}.png"))
     gallery = []
     for task in sorted({run["task"] for run, _ in runs}):
         run, run_dir = next((r, d) for r, d in runs if r["task"] == task)

@@ -16,7 +16,7 @@ from gymnasium.error import ResetNeeded
 
 from suctionbench.clutter.runner import MASK_SOURCES, BinRequest, BinRunner
 from suctionbench.config import cup_preset
-from suctionbench.envs.suction_pick import ACTION_HIGH, ACTION_LOW, MIN_APPROACH_NORM
+from suctionbench.envs.suction_pick import ACTION_HIGH, ACTION_LOW, MIN_APPROACH_NORM, image_spaces
 from suctionbench.errors import InputError
 from suctionbench.sensing.camera import resolve_camera
 from suctionbench.sim.episode import EpisodeResult
@@ -131,13 +131,8 @@ class SuctionBinEnv(gymnasium.Env):
         self.intrinsics = resolve_camera(camera)
         self.observation_noise = bool(observation_noise)
         shape = (self.intrinsics.height, self.intrinsics.width)
-        self.observation_space = spaces.Dict({
-            "depth": spaces.Box(0.0, np.inf, shape, np.float32),
-            "intrinsics": spaces.Box(-np.inf, np.inf, (3, 3), np.float32),
-            "camera_pose": spaces.Box(-np.inf, np.inf, (4, 4), np.float32),
-            "mask": spaces.MultiBinary(shape),
-            "regions": spaces.Box(0, MAX_REGIONS, shape, np.uint8),
-        })
+        self.observation_space = spaces.Dict({**image_spaces(self.intrinsics),
+                                              "regions": spaces.Box(0, MAX_REGIONS, shape, np.uint8)})
         self.action_space = spaces.Box(ACTION_LOW, ACTION_HIGH, dtype=np.float32)
         self._runner: BinRunner | None = None
         self._observation: dict[str, np.ndarray] | None = None
@@ -207,15 +202,10 @@ class SuctionBinEnv(gymnasium.Env):
             return None
         if self._runner is None:
             raise ResetNeeded("call reset() before render()")
-        import mujoco
+        from suctionbench.sensing.camera import render_colour
 
         runner = self._runner
-        renderer = mujoco.Renderer(runner.scene.model, self.intrinsics.height, self.intrinsics.width)
-        try:
-            renderer.update_scene(runner.episode.data, runner.scene.camera)
-            return renderer.render().copy()
-        finally:
-            renderer.close()
+        return render_colour(runner.scene.model, runner.episode.data, runner.scene.camera, self.intrinsics)
 
     def close(self) -> None:
         self._runner, self._observation, self._done = None, None, True

@@ -36,6 +36,17 @@ MIN_APPROACH_NORM = 1e-9
 """An approach vector shorter than this has no direction: the action is invalid."""
 
 
+def image_spaces(intrinsics: Any) -> dict[str, spaces.Space]:
+    """The observation's image entries (see the class docstring): depth, intrinsics, camera pose, mask."""
+    shape = (intrinsics.height, intrinsics.width)
+    return {
+        "depth": spaces.Box(0.0, np.inf, shape, np.float32),
+        "intrinsics": spaces.Box(-np.inf, np.inf, (3, 3), np.float32),
+        "camera_pose": spaces.Box(-np.inf, np.inf, (4, 4), np.float32),
+        "mask": spaces.MultiBinary(shape),
+    }
+
+
 class _Diverged(Exception):
     """The simulation went unstable while the object re-settled."""
 
@@ -203,13 +214,7 @@ class SuctionPickEnv(gymnasium.Env):
         self.object_keys = sorted(self.records)
         """Keys of the objects an episode is drawn from, in a fixed order (the draw depends on it)."""
 
-        shape = (self.intrinsics.height, self.intrinsics.width)
-        self.observation_space = spaces.Dict({
-            "depth": spaces.Box(0.0, np.inf, shape, np.float32),
-            "intrinsics": spaces.Box(-np.inf, np.inf, (3, 3), np.float32),
-            "camera_pose": spaces.Box(-np.inf, np.inf, (4, 4), np.float32),
-            "mask": spaces.MultiBinary(shape),
-        })
+        self.observation_space = spaces.Dict(image_spaces(self.intrinsics))
         self.action_space = spaces.Box(ACTION_LOW, ACTION_HIGH, dtype=np.float32)
 
         self.last_wall_time: float | None = None

@@ -20,6 +20,27 @@ THUMBNAIL_LIGHT = np.array([0.3, -0.4, 1.0])
 """Direction towards the thumbnail's light."""
 
 
+def style_axes(ax: Any, xlabel: str, ylabel: str, title: str) -> None:
+    """The report's look for a [0, 1] curve plot: labels, y from 0 to 1, a light grid, a legend."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_ylim(0, 1.02)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    ax.set_title(title, fontsize=9)
+
+
+def save_figure(fig: Any, out: Path, name: str) -> str:
+    """Write a matplotlib figure as out/name (PNG, atomically), close it, and return `name`."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    with atomic_path(out / name) as tmp:
+        fig.savefig(tmp, format="png", dpi=110)
+    plt.close(fig)
+    return name
+
+
 def object_thumbnail(mesh: Any, size: int = 96) -> np.ndarray:
     """An (size, size, 3) uint8 picture of a mesh: orthographic view along -THUMBNAIL_VIEW,
     Lambertian shading of the first hit's face normal, white background."""

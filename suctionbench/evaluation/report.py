@@ -210,7 +210,7 @@ def _write_report(run_dirs: list[Path], summaries: list[dict[str, Any]], all_rec
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from suctionbench.evaluation.figures import headline_figure
+    from suctionbench.evaluation.figures import headline_figure, save_figure, style_axes
     from suctionbench.learning.metrics import precision_recall_curve
 
     galleries: dict[str, list[tuple[str, str]]] = {FAILURES: [], QUALITY_MAPS: []}  # title -> (png, caption)
@@ -243,18 +243,8 @@ def _write_report(run_dirs: list[Path], summaries: list[dict[str, Any]], all_rec
             ax_pr.plot(recall, precision, label=label, lw=1)
             ax_sa.plot(*success_attempt_curve(q, success), label=label, lw=1)
         for ax, (xl, yl) in ((ax_pr, ("recall", "precision")), (ax_sa, ("attempt rate", "success rate"))):
-            ax.set_xlabel(xl)
-            ax.set_ylabel(yl)
-            ax.set_ylim(0, 1.02)
-            ax.grid(alpha=0.3)
-            ax.legend(fontsize=7)
-            ax.set_title(f"{group.replace('_', ' ')}: {yl} vs {xl}", fontsize=9)
-        fig.tight_layout()
-        name = f"curves_{group}.png"
-        with atomic_path(out / name) as tmp:
-            fig.savefig(tmp, format="png", dpi=110)
-        plt.close(fig)
-        figures.append(name)
+            style_axes(ax, xl, yl, f"{group.replace('_', ' ')}: {yl} vs {xl}")
+        figures.append(save_figure(fig, out, f"curves_{group}.png"))
     tables = _tables(summaries)
     objects = _object_cards(per_object, out)
     runs = [_run_info(run_dir, summary) for run_dir, summary in zip(run_dirs, summaries, strict=True)]

@@ -507,6 +507,19 @@ def camera_pose_from_data(model: mujoco.MjModel, data: mujoco.MjData, camera_nam
     return pose
 
 
+def render_colour(model: Any, data: Any, camera: str, intrinsics: CameraIntrinsics) -> np.ndarray:
+    """A model camera's colour view of a state, (H, W, 3) uint8. The OpenGL context is made and freed
+    per call (about 0.2 s): one left for the garbage collector at interpreter exit fails noisily."""
+    import mujoco
+
+    renderer = mujoco.Renderer(model, intrinsics.height, intrinsics.width)
+    try:
+        renderer.update_scene(data, camera)
+        return renderer.render().copy()
+    finally:
+        renderer.close()
+
+
 class DepthRenderer:
     """Metric z-depth images of model cameras through MuJoCo's offscreen OpenGL renderer.
 

@@ -334,12 +334,9 @@ class PickRunner:
 
     def render_rgb(self) -> np.ndarray:
         """The overhead camera's colour view of the current state, (H, W, 3) uint8."""
-        renderer = mujoco.Renderer(self.scene.model, self.intrinsics.height, self.intrinsics.width)
-        try:
-            renderer.update_scene(self.episode.data, self.scene.camera)
-            return renderer.render().copy()
-        finally:
-            renderer.close()
+        from suctionbench.sensing.camera import render_colour
+
+        return render_colour(self.scene.model, self.episode.data, self.scene.camera, self.intrinsics)
 
     def render_png(self, path: Path) -> None:
         """Save `render_rgb` as a PNG."""

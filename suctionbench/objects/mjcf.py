@@ -32,7 +32,8 @@ def add_object_body(
     quat=(1.0, 0.0, 0.0, 0.0),
     free: bool = True,
 ) -> mujoco.MjsBody:
-    """Add `record` as a body named `name` under the world body of `spec`; returns the body."""
+    """Add `record` as a body named `name` under the world body of `spec`; returns the body. Its
+    collision geoms are its convex parts, or its convex hull when it has none."""
     body = spec.worldbody.add_body(name=name, pos=list(pos), quat=list(quat))
     if free:
         body.add_freejoint(name=f"{name}_free")
@@ -42,7 +43,9 @@ def add_object_body(
     body.fullinertia = [record.inertia[0][0], record.inertia[1][1], record.inertia[2][2],
                         record.inertia[0][1], record.inertia[0][2], record.inertia[1][2]]
     friction = [record.friction, TORSIONAL_FRICTION, ROLLING_FRICTION]
-    for i, part in enumerate(record.part_meshes()):
+    # An object built without convex parts (the training corpus: rendered only, never decomposed)
+    # collides as its surface mesh, which MuJoCo treats as its convex hull.
+    for i, part in enumerate(record.part_meshes() or [record.mesh()]):
         mesh = spec.add_mesh(name=f"{name}_part_{i:03d}")
         mesh.uservert = np.asarray(part.vertices, dtype=np.float32).ravel().tolist()
         mesh.userface = np.asarray(part.faces, dtype=np.int32).ravel().tolist()

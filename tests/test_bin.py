@@ -263,3 +263,20 @@ def test_generate_rejects_an_unknown_scene(tmp_path):
     result = CliRunner().invoke(app, ["generate", "--objects", "basic", "--datapoints", "10", "--scene", "heap",
                                       "--out", str(tmp_path / "d"), "--json"])
     assert result.exit_code == 2 and "--scene" in json.loads(result.stdout.strip().splitlines()[-1])["error"]
+
+
+def test_an_object_without_convex_parts_collides_as_its_hull(monkeypatch):
+    # Training-corpus objects are built without a convex decomposition; in a bin they must still
+    # collide (they fell through the floor): their surface mesh becomes the one collision geom,
+    # which MuJoCo treats as its convex hull.
+    from suctionbench.objects.mjcf import add_object_body
+    from suctionbench.objects.registry import load_object
+
+    record = load_object("basic/box_tea")
+    monkeypatch.setattr(type(record), "part_meshes", lambda self: [])
+    spec = mujoco.MjSpec()
+    add_object_body(spec, record)
+    model = spec.compile()
+    colliding = [g for g in range(model.ngeom) if model.geom_contype[g] or model.geom_conaffinity[g]]
+    assert len(colliding) == 1
+    assert model.geom_rbound[colliding[0]] == pytest.approx(np.linalg.norm(record.mesh().extents) / 2, rel=0.05)

@@ -28,7 +28,9 @@ def is_bin_run(run_dir: Path) -> bool:
 
 
 def _label(run: dict[str, Any]) -> str:
-    return run["policy"] + (" (oracle masks)" if run.get("masks") == "oracle" else "")
+    """The policy, the model it was given (by its directory's name) and the masks if not from depth."""
+    model = f" [{Path(run['model']).name}]" if run.get("model") else ""
+    return run["policy"] + model + (" (oracle masks)" if run.get("masks") == "oracle" else "")
 
 
 def _order(run: dict[str, Any]) -> tuple:

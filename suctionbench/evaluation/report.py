@@ -428,13 +428,14 @@ def _write_markdown(out: Path, tables: list[Table], figures, objects, galleries,
         lines.append("")
     curves = [f for f in figures if f != "headline.png"]
     lines += ["## Curves", ""] + [f"![{f}]({f})" for f in curves]
-    lines += ["", "## Per object (successes / trials)", "", "| object | | runs |", "|---|---|---|"]
+    if objects:
+        lines += ["", "## Per object (successes / trials)", "", "| object | | runs |", "|---|---|---|"]
     for card in objects:
         image = f"![{card['object']}]({card['image']})" if card["image"] else ""
         counts = "<br>".join(f"{run}: {s}/{n}" for run, s, n in card["counts"])
         lines.append(f"| {card['object']} | {image} | {counts} |")
     for title, items in galleries.items():
-        if items or title == FAILURES:
+        if items or (title == FAILURES and objects):
             lines += ["", f"## {title}", ""]
             lines += [f"![{caption}]({name}) {caption}  " for name, caption in items]
     lines += ["", "## Runs and versions", ""]
@@ -471,7 +472,7 @@ def _write_html(out: Path, tables: list[Table], figures, objects, galleries, foo
         f"<h2>{esc(title)}</h2>" + "".join(
             f'<figure><img src="{esc(n)}" width="192" alt="{esc(c)}"><figcaption>{esc(c)}</figcaption></figure>'
             for n, c in items)
-        for title, items in galleries.items() if items or title == FAILURES
+        for title, items in galleries.items() if items or (title == FAILURES and objects)
     )
     runs = "".join(
         f"<li><b>{esc(r['run'])}</b>: {r['trials']} trials, seed {esc(str(r['seed']))}, camera "
@@ -488,7 +489,7 @@ figure.object img{{flex:none}}code{{font-size:small;overflow-wrap:anywhere}}.cap
 footer{{margin-top:2em;border-top:1px solid #999;font-size:small}}</style></head><body>
 <h1>suctionbench report</h1><p>{esc(INTRO)}</p>
 {"".join(sections)}<h2>Curves</h2>{curves}
-<h2>Per object (successes / trials)</h2>{cards}{gallery}
+{"<h2>Per object (successes / trials)</h2>" + cards if objects else ""}{gallery}
 <footer><h2>Runs and versions</h2><ul>{runs}</ul><p>Report: <code>{esc(footer["report_command"])}</code></p>
 <p>Versions: {versions}</p></footer></body></html>"""
     with atomic_path(out / "index.html") as tmp:

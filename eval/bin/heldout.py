@@ -1,0 +1,43 @@
+"""Held-out scores of trained GQ-CNNs on a dataset's validation split: accuracy (q > 0.5 against
+rwr > the dataset's label threshold) and AP, model by model on the same datapoints. What the bin
+README's "what clutter data adds" table reads.
+
+    .venv/bin/python eval/bin/heldout.py DATASET MODEL [MODEL ...] [--split object_wise]
+"""
+
+import argparse
+import json
+
+import numpy as np
+
+from suctionbench.dataset.storage import read_card
+from suctionbench.learning.checkpoint import load_model
+from suctionbench.learning.data import SplitData
+from suctionbench.learning.metrics import average_precision
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("dataset")
+    parser.add_argument("models", nargs="+")
+    parser.add_argument("--split", default="object_wise")
+    args = parser.parse_args()
+    threshold = float(read_card(args.dataset).get("config", {}).get("label_threshold", 0.2))
+    for directory in args.models:
+        model = load_model(directory)
+        data = SplitData(args.dataset, args.split, "val", image_channels=model.image_channels,
+                         object_context=model.pose_dim > 2)
+        q, metric = [], []
+        for shard in data.shards:
+            batch = data.load_shard(shard)
+            q.append(model.predict(batch.images, batch.poses))
+            metric.append(batch.metric)
+        q, metric = np.concatenate(q), np.concatenate(metric)
+        label = metric > threshold
+        print(json.dumps({"model": directory, "datapoints": len(q), "positive_rate": round(float(label.mean()), 4),
+                          "accuracy": round(float(((q > 0.5) == label).mean()), 4),
+                          "ap": round(float(average_precision(label, q)), 4)}))
+
+
+if __name__ == "__main__":
+    main()

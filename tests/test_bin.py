@@ -280,3 +280,48 @@ def test_an_object_without_convex_parts_collides_as_its_hull(monkeypatch):
     colliding = [g for g in range(model.ngeom) if model.geom_contype[g] or model.geom_conaffinity[g]]
     assert len(colliding) == 1
     assert model.geom_rbound[colliding[0]] == pytest.approx(np.linalg.norm(record.mesh().extents) / 2, rel=0.05)
+
+
+def test_what_rests_on_an_object_is_load_the_cup_must_lift():
+    # Two boxes stacked flat in the bin. In static equilibrium the top box's weight m2 g is carried
+    # only by its contacts with the bottom box (it touches nothing else), so the downward force it
+    # presses the bottom box with sums to m2 g (MuJoCo's soft contacts: to the solver's residual,
+    # 2 % here), and by the top box's torque balance that force acts under its centre of mass. The
+    # mass the cup must lift at the bottom box is m1 + m2 with their common centre of mass (xy);
+    # nothing rests on the top box.
+    from suctionbench.clutter.episode import BinEpisode
+    from suctionbench.clutter.scene import PickBinConfig, build_bin_scene
+    from suctionbench.config import CUP_DEFAULT
+    from suctionbench.objects.registry import load_object
+    from suctionbench.sensing.camera import resolve_camera
+
+    bottom_record, top_record = load_object("basic/box_book"), load_object("basic/box_brick")
+    scene = build_bin_scene([bottom_record, top_record], CUP_DEFAULT, resolve_camera("primesense"), np.eye(4))
+    ep = BinEpisode(scene, PickBinConfig())
+    ep.reset(np.random.default_rng(0))
+    bottom, top = ep.bodies
+    cx, cy = ep.bin.centre
+    z = ep.bin.floor
+    for body, record in ((bottom, bottom_record), (top, top_record)):
+        ep._unpark(body)
+        pose = record.most_probable_pose()
+        adr = ep.model.jnt_qposadr[ep.model.body_jntadr[body]]
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, pose[:3, :3].ravel())
+        ep.data.qpos[adr:adr + 3] = [cx + (0.01 if body == top else 0.0), cy, z + pose[2, 3] + 0.0005]
+        ep.data.qpos[adr + 3:adr + 7] = quat
+        ep.data.qvel[ep._dofs(body)] = 0.0
+        mujoco.mj_forward(ep.model, ep.data)
+        z = float(ep._object_z(body).max())
+    ep.present = [bottom, top]
+    q_hold = ep.data.qpos[ep.arm_qpos].copy()
+    assert ep.settle(lambda: ep._step(q_hold), ep.present)
+    g = 9.80665
+    load, at = ep.resting_load(bottom)
+    assert load == pytest.approx(top_record.mass * g, rel=0.02)
+    assert ep.resting_load(top) == (0.0, None)
+    com_bottom, com_top = ep.data.xipos[bottom].copy(), ep.data.xipos[top].copy()
+    mass, com = ep.loaded(bottom, bottom_record.mass, com_bottom)
+    assert mass == pytest.approx(bottom_record.mass + top_record.mass, rel=0.02)
+    expected = (bottom_record.mass * com_bottom + top_record.mass * com_top) / (bottom_record.mass + top_record.mass)
+    assert np.allclose(com[:2], expected[:2], atol=1e-3)

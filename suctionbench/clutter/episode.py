@@ -36,6 +36,7 @@ import mujoco
 import numpy as np
 
 from suctionbench.clutter.scene import PICK_BIN, PickBinConfig
+from suctionbench.config import STANDARD_GRAVITY
 from suctionbench.sim.episode import FAILURES, EpisodeConfig, EpisodeResult, PickEpisode, _Failure, _random_quat
 from suctionbench.sim.scene import Scene
 
@@ -367,6 +368,39 @@ class BinEpisode(PickEpisode):
         mesh = mesh.copy()
         mesh.apply_transform(pose)
         return mesh, pose[:3, :3] @ np.asarray(com) + pose[:3, 3]
+
+    def resting_load(self, body: int) -> tuple[float, np.ndarray | None]:
+        """The downward force (N) the other objects in the bin press onto `body` with, summed over
+        their contacts (MuJoCo's contact forces, world z), and where it acts: the force-weighted mean
+        of those contact points (None without any)."""
+        m, d = self.model, self.data
+        force, total, moment = np.zeros(6), 0.0, np.zeros(3)
+        others = set(self.present) - {body}
+        for i in range(d.ncon):
+            contact = d.contact[i]
+            b1, b2 = int(m.geom_bodyid[contact.geom1]), int(m.geom_bodyid[contact.geom2])
+            if body not in (b1, b2) or not ({b1, b2} & others):
+                continue
+            mujoco.mj_contactForce(m, d, i, force)
+            world = contact.frame.reshape(3, 3).T @ force[:3]  # the force on geom2, from geom1
+            down = -(world[2] if b2 == body else -world[2])
+            if down > 0.0:
+                total += down
+                moment += down * contact.pos
+        return total, (moment / total if total > 0.0 else None)
+
+    def loaded(self, body: int, mass: float, com: np.ndarray) -> tuple[float, np.ndarray]:
+        """The mass and centre of mass (world) the cup must lift at `body`: the object's own, plus
+        what its neighbours press onto it (`resting_load`) as mass at where it acts. A lift raises
+        whatever rests on the object until it slides off, so the labeller, which sees the object
+        alone, must carry that weight too (objects pinned under others were lost in the lift with
+        robust labels: eval/bin/pinned.py). Horizontal contact forces are left out."""
+        load, at = self.resting_load(body)
+        if at is None:
+            return mass, np.asarray(com, float)
+        extra = load / STANDARD_GRAVITY
+        total = mass + extra
+        return total, (mass * np.asarray(com, float) + extra * at) / total
 
     def state(self) -> dict[str, Any]:
         """What is in the bin now: names and world poses (position, quaternion) of the objects."""

@@ -9,7 +9,8 @@ without a q (random) picks a region at random. A user's plug-in policy gets the 
 likes.
 
 Known state (`analytic_in_bin`): the true meshes and poses of every object in the bin; surface
-grasps of each ranked by the robust wrench resistance, as the single-object analytic policy does,
+grasps of each ranked by the robust wrench resistance with the load its neighbours press onto it
+(`BinEpisode.loaded`), as the single-object analytic policy ranks them,
 and the best whose cup path is clear: rays along the approach from the lip's rim and the axis, back
 over the pregrasp distance, must meet nothing but the target (neither a neighbour nor a wall).
 """
@@ -123,8 +124,9 @@ def analytic_in_bin(episode: Any, objects: dict[int, tuple[Any, Any]], cup: Any,
     for body in episode.present:
         record, own_mesh = objects[body]
         mesh, com = episode.posed_mesh(body, own_mesh, record.com)
+        mass, com = episode.loaded(body, record.mass, com)  # with what rests on it
         try:
-            ranked = analytic_grasp(mesh, com, record.mass, cup, seed, metric=metric, candidates=candidates)
+            ranked = analytic_grasp(mesh, com, mass, cup, seed, metric=metric, candidates=candidates)
         except NoGraspError:
             continue
         scores = ranked.candidate_scores

@@ -1,7 +1,8 @@
 """One bin-picking episode end to end: fill the bin, then observe, plan, attempt, until the bin is
 clear, K attempts in a row have failed, or the attempt limit is reached. Every attempt is labelled
 analytically on the object under the grasp point in its true pose (as single-object trials are),
-so the labels, the policy's q and the simulated outcome sit side by side."""
+carrying what its neighbours press onto it (`BinEpisode.loaded`), so the labels, the policy's q
+and the simulated outcome sit side by side."""
 
 from __future__ import annotations
 
@@ -169,8 +170,9 @@ class BinRunner:
         body = self.scene.model.body(body_name).id
         record, mesh = self.objects[body]
         world_mesh, com = self.episode.posed_mesh(body, mesh, record.com)
+        mass, com = self.episode.loaded(body, record.mass, com)
         seed = int(np.random.default_rng((self.request.task.seed, self.request.trial, attempt, 4)).integers(2**31))
-        return grasp_labels(world_mesh, com, record.mass, self.request.cup, point, approach, seed)
+        return grasp_labels(world_mesh, com, mass, self.request.cup, point, approach, seed)
 
     def run(self, log: Any = None) -> dict[str, Any]:
         """Fill the bin and pick until it is clear, K failures in a row, or the attempt limit; the

@@ -5,7 +5,8 @@ objects, settled in MuJoCo, and shows it to a camera over the bin (`clutter.scen
 at `GenerationConfig.bin_images` stages of its clearing (a random object taken out between
 images). On each image, grasps sampled on every object's surface that the camera sees at their
 pixel are labelled with their own object's robust label in its true pose (its mesh, mass and
-centre of mass; gravity straight down), and a grasp whose gripper path meets a neighbour or a
+centre of mass, plus the load its neighbours press onto it: `BinEpisode.loaded`; gravity straight
+down), and a grasp whose gripper path meets a neighbour or a
 wall (`clutter.planning.path_is_clear`: the cup's rim and the wrist) gets the label 0: it would
 fail, and a network that never saw such grasps would propose them. The object context reads the
 object's own pixels (the renderer's instance mask), as a policy planning per region does.
@@ -130,7 +131,8 @@ class _BinUnit:
             record = self.records[i]
             _, index, pixels, depths, angles, p_world, v_world = (np.array(col) for col in zip(*group, strict=True))
             mesh, com = ep.posed_mesh(body, self.meshes[i], record.com)
-            labeller = SuctionLabeller(mesh, c.label, mass=record.mass, com=com)
+            mass, com = ep.loaded(body, record.mass, com)  # with what its neighbours press onto it
+            labeller = SuctionLabeller(mesh, c.label, mass=mass, com=com)
             seed = int(np.random.SeedSequence((c.seed, self.unit.index, image, int(body))).generate_state(1)[0])
             labels = labeller.label(p_world, v_world, seed, metrics=("wr", "rwr"))
             clear = np.array([path_is_clear(ep.model, ep.data, p, v, body, c.label.cup.radius, CUP_PATH_LENGTH)

@@ -1,7 +1,7 @@
 """Why robust-labelled grasps are lost in the lift in a bin: replay a bin run's bins (the same seeds
 give the same attempts) and, before each attempt the label calls robust (rwr > 0.5) but the
-simulation lost in the lift, sum the contact forces the other objects press onto the target with.
-The labeller judges the target alone; a neighbour resting on it is load the cup must also lift.
+simulation lost in the lift, sum the contact forces the other objects press onto the target with
+(`BinEpisode.resting_load`). A neighbour resting on the target is load the cup must also lift.
 
     .venv/bin/python eval/bin/pinned.py RUN_DIR [--bins N]
 
@@ -16,28 +16,10 @@ from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
 from suctionbench.clutter.runner import BinRequest, BinRunner  # noqa: E402
 from suctionbench.clutter.tasks import load_bin_task  # noqa: E402
-
-
-def neighbour_load(runner: BinRunner, target: int) -> float:
-    """Downward force (N) other objects press onto `target` with (contact forces, world z)."""
-    m, d = runner.episode.model, runner.episode.data
-    force, total = np.zeros(6), 0.0
-    others = set(runner.episode.present) - {target}
-    for i in range(d.ncon):
-        c = d.contact[i]
-        b1, b2 = int(m.geom_bodyid[c.geom1]), int(m.geom_bodyid[c.geom2])
-        if target not in (b1, b2) or not ({b1, b2} & others):
-            continue
-        mujoco.mj_contactForce(m, d, i, force)
-        world = c.frame.reshape(3, 3).T @ force[:3]  # contact frame -> world; on geom2 from geom1
-        on_target = world if b2 == target else -world
-        total += max(0.0, -on_target[2])
-    return total
 
 
 def main() -> None:
@@ -62,7 +44,7 @@ def main() -> None:
                 continue
             point, approach, q, info = runner.plan(attempt)
             target = runner.episode.target_at(point, approach)
-            load = neighbour_load(runner, target)
+            load, _ = runner.episode.resting_load(target)
             weight = runner.objects[target][0].mass * 9.81
             replay = runner.attempt_grasp(attempt, point, approach, q, info)
             loads.append(load / weight)

@@ -325,3 +325,20 @@ def test_what_rests_on_an_object_is_load_the_cup_must_lift():
     assert mass == pytest.approx(bottom_record.mass + top_record.mass, rel=0.02)
     expected = (bottom_record.mass * com_bottom + top_record.mass * com_top) / (bottom_record.mass + top_record.mass)
     assert np.allclose(com[:2], expected[:2], atol=1e-3)
+
+
+def test_bin_metrics_count_a_plan_per_region():
+    from suctionbench.clutter.runner import bin_metrics
+
+    def attempt(success, transported, regions, planned, sim_time=10.0):
+        return {"success": success, "failure": None if success else "no_seal", "transported": transported,
+                "sim_time": sim_time, "region": 0 if regions else None, "region_q": [0.5] * regions,
+                "regions": regions, "planned": planned, "label_rwr": None}
+
+    bins = [{"in_bin": ["a", "b", "c", "d"], "transported": 2, "ended": "failures",
+             "attempts": [attempt(True, ["a"], 4, 4), attempt(False, [], 3, 3), attempt(True, ["b"], 2, 2)]}]
+    m = bin_metrics(bins, {"sensing_s": 0.5, "planning_s": 1.0})
+    # cycle = 3 x 10 s of motion + 3 x 0.5 s sensing + (4 + 3 + 2) plans x 1 s = 40.5 s for 2 objects
+    assert m["picks_per_hour"] == pytest.approx(round(3600 * 2 / 40.5, 1))
+    assert m["clearance"] == 0.5 and m["success_per_attempt"] == pytest.approx(0.6667, abs=1e-4)
+    assert m["attempts_per_object"] == 1.5 and m["failures"] == {"no_seal": 1}

@@ -99,12 +99,11 @@ def run_bin_eval(task: BinTask, policy: str, out: Path, *, model: str | None = N
             bins.append(record)
             if progress is not None:
                 progress(1)
-        per_attempt = compute["sensing_s"] + compute["planning_s"]
         run = {
             "kind": RUN_KIND, "task": task.name, "policy": policy, "policy_args": policy_args or {},
             "model": model, "masks": masks, "cup": cup, "camera": camera, "seed": task.seed, "trials": count,
             "compute_model": compute, "command": _invocation(), "versions": _versions(),
-            "metrics": bin_metrics(bins, per_attempt), "bins": bins,
+            "metrics": bin_metrics(bins, compute), "bins": bins,
         }
         (staging / "run.json").write_text(json.dumps(json_safe(run), indent=1))
     summary = {k: v for k, v in run.items() if k != "bins"}

@@ -42,18 +42,21 @@ def plan_in_regions(policy: Any, observation: Observation, regions: list[np.ndar
                     *, per_region: bool = True, max_regions: int = 10,
                     avoid: np.ndarray | None = None) -> tuple[GraspAction, dict[str, Any]]:
     """The policy's grasp in the bin and what the choice saw ({"regions", "region", "region_q",
-    "avoided"}): the best region's grasp by q, passing over grasps near `avoid` (world points of
-    failed grasps, `AVOID_RADIUS`) unless no region has another. NoGraspError when no region yields
-    a grasp."""
+    "avoided", "planned": how many regions it planned on}): the best region's grasp by q, passing
+    over grasps near `avoid` (world points of failed grasps, `AVOID_RADIUS`) unless no region has
+    another. NoGraspError when no region yields a grasp."""
     if not per_region:
-        return policy.plan(observation, rng), {"regions": len(regions), "region": None, "region_q": [], "avoided": 0}
+        return policy.plan(observation, rng), {"regions": len(regions), "region": None, "region_q": [], "avoided": 0,
+                                               "planned": 1}
     if not regions:
         raise NoGraspError("no object region in the bin (empty bin or nothing above its floor)")
     regions = regions[:max_regions]
     streams = rng.spawn(len(regions))
     qs: list[float | None] = [None] * len(regions)
     found: list[tuple[int, GraspAction]] = []
+    planned = 0
     for i in rng.permutation(len(regions)):
+        planned += 1
         try:
             action = policy.plan(replace(observation, mask=regions[i]), streams[i])
         except NoGraspError:
@@ -73,7 +76,8 @@ def plan_in_regions(policy: Any, observation: Observation, regions: list[np.ndar
         return -math.inf if math.isnan(q) else q
 
     index, best = max(pool, key=quality)  # max keeps the first of equals (the permutation's order)
-    return best, {"regions": len(regions), "region": index, "region_q": qs, "avoided": len(found) - len(fresh)}
+    return best, {"regions": len(regions), "region": index, "region_q": qs, "avoided": len(found) - len(fresh),
+                  "planned": planned}
 
 
 WRIST_RING = (0.035, 0.10, 0.30)

@@ -11,6 +11,8 @@ from typing import Any
 import numpy as np
 
 from suctionbench.clutter.benchmark import LOG_DIR, RUN_KIND, bin_log_name
+from suctionbench.clutter.runner import bin_metrics
+from suctionbench.evaluation.cycle import modelled_compute
 
 BIN_GALLERY = ("Bins (first bin of each task: the depth image before the first attempt; grasps green = success, "
                "red = failure)")
@@ -57,7 +59,7 @@ def bin_sections(run_dirs: list[Path], out: Path) -> dict[str, Any]:
                   key=lambda item: _order(item[0]))
     rows, failure_rows = [], []
     for run, _ in runs:
-        m = run["metrics"]
+        m = bin_metrics(run["bins"], modelled_compute(run))  # from the records: one formula for every run
         rows.append({"task": run["task"], "policy": _label(run), "bins": m["bins"], "objects": m["objects"],
                      "clearance %": _pct(m["clearance"]), "success / attempt %": _pct(m["success_per_attempt"]),
                      "attempts / object": m["attempts_per_object"], "picks/hour": m["picks_per_hour"],

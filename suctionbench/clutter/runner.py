@@ -244,16 +244,25 @@ class BinRunner:
         }
 
 
-def bin_metrics(bins: list[dict[str, Any]], planning_s: float) -> dict[str, Any]:
+def plans_of(attempt: dict[str, Any]) -> int:
+    """How many times the policy planned for an attempt: once per region it planned on (per-region
+    planning), once otherwise (a plug-in on the whole bin, a known-state policy)."""
+    if attempt.get("region") is None and not attempt.get("region_q"):
+        return 1
+    return int(attempt.get("planned") or attempt.get("regions") or 1)
+
+
+def bin_metrics(bins: list[dict[str, Any]], compute: dict[str, float]) -> dict[str, Any]:
     """Per-task figures over bins: clearance (objects removed / objects in the bins), success per
-    attempt, picks per hour (transported objects over simulated motion plus `planning_s` per
-    attempt), mean attempts per object removed, and failure reasons."""
+    attempt, picks per hour (objects removed over simulated motion plus the modelled compute of
+    each attempt: one depth frame, `compute["sensing_s"]`, and `compute["planning_s"]` per plan,
+    `plans_of`), mean attempts per object removed, and failure reasons."""
     attempts = [a for b in bins for a in b["attempts"]]
     objects = sum(len(b["in_bin"]) for b in bins)
     transported = sum(b["transported"] for b in bins)
     successes = sum(bool(a["success"]) for a in attempts)
     motion = sum(float(a["sim_time"]) for a in attempts)
-    cycle = motion + planning_s * len(attempts)
+    cycle = motion + sum(compute["sensing_s"] + compute["planning_s"] * plans_of(a) for a in attempts)
     reasons: dict[str, int] = {}
     for a in attempts:
         if a["failure"]:

@@ -342,3 +342,14 @@ def test_bin_metrics_count_a_plan_per_region():
     assert m["picks_per_hour"] == pytest.approx(round(3600 * 2 / 40.5, 1))
     assert m["clearance"] == 0.5 and m["success_per_attempt"] == pytest.approx(0.6667, abs=1e-4)
     assert m["attempts_per_object"] == 1.5 and m["failures"] == {"no_seal": 1}
+
+
+def test_the_clutter_model_loads_and_is_the_documented_one():
+    # assets/models/gqcnn-bin/README.md documents its held-out clutter scores; the card must agree.
+    from suctionbench.learning.checkpoint import load_model
+
+    model = load_model("assets/models/gqcnn-bin")  # verifies the weights against the card's sha256
+    assert model.arch == "context-pose"
+    assert model.card["metrics"]["val_ap"] == pytest.approx(0.755, abs=5e-4)
+    assert model.card["metrics"]["val_accuracy"] == pytest.approx(0.901, abs=5e-4)
+    assert "--init assets/models/gqcnn-context-pose" in model.card["command"]

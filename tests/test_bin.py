@@ -263,6 +263,7 @@ def test_generate_rejects_an_unknown_scene(tmp_path):
     result = CliRunner().invoke(app, ["generate", "--objects", "basic", "--datapoints", "10", "--scene", "heap",
                                       "--out", str(tmp_path / "d"), "--json"])
     assert result.exit_code == 2 and "--scene" in json.loads(result.stdout.strip().splitlines()[-1])["error"]
+    assert not (tmp_path / "d").exists()  # nothing half-written
 
 
 def test_an_object_without_convex_parts_collides_as_its_hull(monkeypatch):
@@ -310,7 +311,7 @@ def test_what_rests_on_an_object_is_load_the_cup_must_lift():
         mujoco.mju_mat2Quat(quat, pose[:3, :3].ravel())
         ep.data.qpos[adr:adr + 3] = [cx + (0.01 if body == top else 0.0), cy, z + pose[2, 3] + 0.0005]
         ep.data.qpos[adr + 3:adr + 7] = quat
-        ep.data.qvel[ep._dofs(body)] = 0.0
+        ep.data.qvel[ep.dofs_of(body)] = 0.0
         mujoco.mj_forward(ep.model, ep.data)
         z = float(ep._object_z(body).max())
     ep.present = [bottom, top]

@@ -121,9 +121,16 @@ def test_shipped_depth_example_is_the_scene_render_depth_makes():
     assert result.plane.inlier_fraction > 0.7 and result.action.approach_world[2] < -0.8
 
 
-def test_bin_loop_clears_part_of_a_smoke_bin():
+def test_bin_loop_clears_part_of_a_smoke_bin(capsys):
     cleared = _module("bin_loop").main(task="bin-smoke", seed=0)
     assert 0.0 <= cleared <= 1.0
+    out = capsys.readouterr().out
+    attempts = [line for line in out.splitlines() if line.startswith("attempt ")]
+    assert attempts  # it made at least one grasp attempt
+    # the summary it prints counts the rewards it received: removed / in the bin is what it returned
+    removed, total = (int(x) for x in out.split("removed ")[-1].split(" objects")[0].split(" of "))
+    assert removed / total == pytest.approx(cleared)
+    assert removed == sum(int(line.split("reward ")[1].split()[0]) for line in attempts)
 
 
 def test_policy_plugin_runs_unchanged_on_a_bin(tmp_path):

@@ -71,7 +71,7 @@ def run_bin_eval(task: BinTask, policy: str, out: Path, *, model: str | None = N
                  progress: Any = None) -> dict[str, Any]:
     """Run every bin of `task` with `policy`; returns the run's summary (run.json without the bins)."""
     from suctionbench.clutter.runner import MASK_SOURCES, bin_metrics
-    from suctionbench.config import CUP_PRESETS
+    from suctionbench.config import cup_preset
     from suctionbench.evaluation.cycle import CYCLE_MODEL
     from suctionbench.evaluation.runner import _invocation, _versions
     from suctionbench.io import atomic_dir, json_safe
@@ -80,8 +80,7 @@ def run_bin_eval(task: BinTask, policy: str, out: Path, *, model: str | None = N
 
     if masks not in MASK_SOURCES:
         raise InputError(f"--masks '{masks}': expected one of {', '.join(MASK_SOURCES)}")
-    if cup not in CUP_PRESETS:
-        raise InputError(f"--cup '{cup}': expected one of {', '.join(CUP_PRESETS)}")
+    cup_config = cup_preset(cup)
     resolve_camera(camera)  # a bad camera fails before any work
     if out.is_dir() and any(out.iterdir()) and not overwrite:
         raise InputError(f"--out '{out}': not empty; pass --overwrite to replace a bin run there")
@@ -92,7 +91,7 @@ def run_bin_eval(task: BinTask, policy: str, out: Path, *, model: str | None = N
     with atomic_dir(out, _refuse) as staging:
         (staging / LOG_DIR).mkdir()
         requests = [(BinRequest(task, trial=i, policy=policy, policy_args=dict(policy_args or {}), model=model,
-                                masks=masks, cup=CUP_PRESETS[cup], camera=camera),
+                                masks=masks, cup=cup_config, camera=camera),
                      str(staging / LOG_DIR / bin_log_name(i))) for i in range(count)]
         bins = []
         for record in map_ordered(run_bin, requests, engine=engine, workers=workers, address=address):

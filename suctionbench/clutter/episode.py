@@ -37,7 +37,15 @@ import numpy as np
 
 from suctionbench.clutter.scene import PICK_BIN, PickBinConfig
 from suctionbench.config import STANDARD_GRAVITY
-from suctionbench.sim.episode import FAILURES, EpisodeConfig, EpisodeResult, PickEpisode, _Failure, _random_quat
+from suctionbench.sim.episode import (
+    FAILURES,
+    EpisodeConfig,
+    EpisodeResult,
+    PickEpisode,
+    _Failure,
+    _random_quat,
+    _Unstable,
+)
 from suctionbench.sim.scene import Scene
 
 CLUTTER_FAILURES = FAILURES + ("collision_bin", "collision_neighbour", "two_lifted", "dragged_out", "missed_receptacle")
@@ -152,7 +160,7 @@ class BinEpisode(PickEpisode):
                 self._drop(b, rng, shrink=attempt / (c.retries + 1))
                 try:
                     settled = self.settle(lambda: self._step(q_hold), [*self.present, b])
-                except Exception as exc:  # noqa: BLE001 - _Unstable: the pile exploded; nothing to pick
+                except _Unstable as exc:  # the pile exploded: nothing to pick
                     self.placement_error = f"while filling the bin: {exc}"
                     return
                 if self._in_bin(b):
@@ -176,31 +184,22 @@ class BinEpisode(PickEpisode):
         (cx, cy), (w, depth) = self.bin.centre, self.bin.inner
         half = np.maximum(np.array([w, depth]) / 2 - c.drop_margin - 0.5 * m.geom_rbound[g], 0.0) * (1.0 - shrink)
         top = max([self.bin.floor, *(float(self._object_z(b).max()) for b in self.present)])
-        adr = m.jnt_qposadr[m.body_jntadr[body]]
+        adr = self.qpos_of(body).start
         d.qpos[adr : adr + 3] = 0.0
         d.qpos[adr + 3 : adr + 7] = _random_quat(rng)
-        d.qvel[self._dofs(body)] = 0.0
+        d.qvel[self.dofs_of(body)] = 0.0
         mujoco.mj_kinematics(m, d)
         target = np.array([cx + rng.uniform(-half[0], half[0]), cy + rng.uniform(-half[1], half[1])])
         d.qpos[adr : adr + 2] = target - d.geom_xpos[g][:2]
         d.qpos[adr + 2] = top + c.drop_height - float(self._object_z(body).min())
         mujoco.mj_forward(m, d)
 
-    def _radius(self, body: int) -> float:
-        g = self.visual_geom(body)
-        return float(np.linalg.norm(self.model.geom_pos[g]) + self.model.geom_rbound[g])
-
-    def _dofs(self, body: int) -> slice:
-        dof = self.model.jnt_dofadr[self.model.body_jntadr[body]]
-        return slice(dof, dof + 6)
-
     def _park(self, body: int) -> None:
         """Take `body` out of the scene: far away, without contacts, floating at rest."""
         m, d = self.model, self.data
         i = self.bodies.index(body)
-        adr = m.jnt_qposadr[m.body_jntadr[body]]
-        d.qpos[adr : adr + 7] = [-2.0 - PARK_SPACING * i, 2.0, 1.0, 1.0, 0.0, 0.0, 0.0]
-        d.qvel[self._dofs(body)] = 0.0
+        d.qpos[self.qpos_of(body)] = [-2.0 - PARK_SPACING * i, 2.0, 1.0, 1.0, 0.0, 0.0, 0.0]
+        d.qvel[self.dofs_of(body)] = 0.0
         m.geom_contype[self._geoms[body]] = 0
         m.geom_conaffinity[self._geoms[body]] = 0
         m.body_gravcomp[body] = 1.0
@@ -213,7 +212,7 @@ class BinEpisode(PickEpisode):
     def _in_bin(self, body: int) -> bool:
         """Whether the object's centre of mass is over the bin's floor and below its rim."""
         p = self.data.xipos[body]
-        return bool(self.bin.contains(p[:2]) and p[2] < self.bin.wall_height + 0.5 * self._radius(body) + 0.02)
+        return bool(self.bin.contains(p[:2]) and p[2] < self.bin.wall_height + 0.5 * self._object_radius(body) + 0.02)
 
     # -- one attempt ------------------------------------------------------------------------------
     def target_at(self, point: np.ndarray, approach: np.ndarray) -> int:
@@ -228,12 +227,12 @@ class BinEpisode(PickEpisode):
         body = int(self.model.geom_bodyid[geom[0]])
         return body if body in self.present else -1
 
-    def attempt(self, point: np.ndarray, approach: np.ndarray) -> AttemptResult:
+    def attempt(self, point: np.ndarray, approach: np.ndarray, target: int | None = None) -> AttemptResult:
         """Pick at world `point` along unit world `approach`, then clear what left the bin, retract
-        and let the pile settle."""
+        and let the pile settle. `target`: the object under the grasp (`target_at`), if known."""
         point = np.asarray(point, float)
         approach = np.asarray(approach, float) / np.linalg.norm(approach)
-        target = self.target_at(point, approach)
+        target = self.target_at(point, approach) if target is None else target
         self.set_target(target if target >= 0 else self.present[0])
         self._aim = target
         self._held = -1
@@ -329,7 +328,7 @@ class BinEpisode(PickEpisode):
         """Vent, put the arm back in its waiting configuration and let the pile settle (see the
         module docstring); an unstable pile is the next attempt's `placement_error`."""
         m, d = self.model, self.data
-        keep = [(self._qpos_slice(b), self._dofs(b)) for b in self.bodies]
+        keep = [(self.qpos_of(b), self.dofs_of(b)) for b in self.bodies]
         saved = [(d.qpos[q].copy(), d.qvel[v].copy()) for q, v in keep]
         d.qpos[:], d.qvel[:], d.ctrl[:] = self.scene.home_qpos, 0.0, self.scene.home_ctrl
         d.qpos[self.arm_qpos] = self._ready_configuration()
@@ -344,7 +343,7 @@ class BinEpisode(PickEpisode):
         try:
             if not self.settle(lambda: self._step(q_hold), self.present):
                 self.unsettled += 1
-        except Exception as exc:  # noqa: BLE001 - _Unstable
+        except _Unstable as exc:
             self.placement_error = f"after the attempt: {exc}"
 
     def remove(self, body: int) -> None:
@@ -354,10 +353,6 @@ class BinEpisode(PickEpisode):
         self._park(body)
         mujoco.mj_forward(self.model, self.data)
         self._retract()
-
-    def _qpos_slice(self, body: int) -> slice:
-        adr = self.model.jnt_qposadr[self.model.body_jntadr[body]]
-        return slice(adr, adr + 7)
 
     def posed_mesh(self, body: int, mesh: Any, com: np.ndarray) -> tuple[Any, np.ndarray]:
         """An object's surface mesh and centre of mass (given in its own frame) moved to its current
@@ -401,11 +396,6 @@ class BinEpisode(PickEpisode):
         extra = load / STANDARD_GRAVITY
         total = mass + extra
         return total, (mass * np.asarray(com, float) + extra * at) / total
-
-    def state(self) -> dict[str, Any]:
-        """What is in the bin now: names and world poses (position, quaternion) of the objects."""
-        d = self.data
-        return {self.names[b]: d.qpos[self._qpos_slice(b)].round(6).tolist() for b in self.present}
 
 
 def _descends_from(model: mujoco.MjModel, body: int, ancestor: int) -> bool:

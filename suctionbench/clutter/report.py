@@ -140,20 +140,14 @@ def clearance_curve(bins: list[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]
 
 def _bin_view(run: dict[str, Any], run_dir: Path, out: Path) -> tuple[str, str] | None:
     """The first bin's first depth image with its attempts' grasps marked (None without a log)."""
-    from suctionbench.runlog.reader import depth_image, iter_messages
+    from suctionbench.evaluation.report import first_view
     from suctionbench.sensing.image import save_png
 
     path = run_dir / LOG_DIR / bin_log_name(0)
-    if not path.is_file():
+    view = first_view(path) if path.is_file() else None
+    if view is None:
         return None
-    depth = next((depth_image(m) for _, m in iter_messages(path, "/camera/depth")), None)
-    calibration = next((m for _, m in iter_messages(path, "/camera/calibration")), None)
-    if depth is None or calibration is None:
-        return None
-    from suctionbench.evaluation.report import _camera_pose
-
-    pose = _camera_pose(path)
-    k = np.asarray(calibration["K"], dtype=float).reshape(3, 3)
+    depth = view.depth
     valid = depth > 0
     # grey from the nearest 1 % (white) to the median depth, mostly the table and the bin's floor (black)
     lo, hi = (np.percentile(depth[valid], 1), np.median(depth[valid])) if valid.any() else (0.0, 1.0)
@@ -163,8 +157,7 @@ def _bin_view(run: dict[str, Any], run_dir: Path, out: Path) -> tuple[str, str] 
         g = attempt.get("grasp_world")
         if not g:
             continue
-        p = pose[:3, :3].T @ (np.asarray(g[:3]) - pose[:3, 3])
-        u, v = (k @ p)[:2] / p[2]
+        u, v = view.pixel(g)
         colour = (40, 200, 60) if attempt["success"] else (220, 40, 40)
         r0, c0 = int(round(v)), int(round(u))
         image[max(r0 - 3, 0):r0 + 4, max(c0 - 3, 0):c0 + 4] = colour

@@ -10,7 +10,6 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-import mujoco
 import numpy as np
 
 from suctionbench.clutter.episode import AttemptResult, BinEpisode
@@ -20,7 +19,7 @@ from suctionbench.clutter.tasks import BinTask
 from suctionbench.config import CUP_DEFAULT, CupConfig
 from suctionbench.objects.registry import list_objects, load_object
 from suctionbench.policies.base import NoGraspError, Observation
-from suctionbench.sensing.camera import resolve_camera, sample_camera_pose
+from suctionbench.sensing.camera import body_image, resolve_camera, sample_camera_pose
 from suctionbench.sensing.segmentation import segment_regions, workspace_mask
 from suctionbench.sim.pick import KNOWN_STATE_POLICIES, NO_LABELS, cached_policy, grasp_labels
 
@@ -116,10 +115,7 @@ class BinRunner:
             segmentation = renderer.segment(ep.data, self.scene.camera) if req.masks == "oracle" else None
         if req.observation_noise:
             depth = apply_axial_noise(depth, np.random.default_rng((req.task.seed, req.trial, attempt, 2)))
-        (cx, cy), (w, d), margin = self.bin.centre, self.bin.inner, 0.005
-        lower = np.array([cx - w / 2 + margin, cy - d / 2 + margin, self.bin.floor + 0.005])
-        upper = np.array([cx + w / 2 - margin, cy + d / 2 - margin, 1.0])
-        inside = workspace_mask(depth, self.intrinsics, self.camera_pose, lower, upper)
+        inside = workspace_mask(depth, self.intrinsics, self.camera_pose, *self.bin.workspace())
         if segmentation is None:
             regions = segment_regions(depth, self.intrinsics, inside)
         else:
@@ -129,9 +125,7 @@ class BinRunner:
 
     def _instance_masks(self, segmentation: np.ndarray, has_depth: np.ndarray) -> list[np.ndarray]:
         """One mask per object in the bin from the renderer's segmentation, largest first."""
-        geom_body = self.scene.model.geom_bodyid
-        is_geom = segmentation[..., 1] == mujoco.mjtObj.mjOBJ_GEOM
-        body = np.where(is_geom, geom_body[np.clip(segmentation[..., 0], 0, None)], -1)
+        body = body_image(self.scene.model, segmentation)
         masks = [(body == b) & has_depth for b in self.episode.present]
         masks = [m for m in masks if m.sum() >= 20]
         return sorted(masks, key=lambda m: -int(m.sum()))
@@ -163,11 +157,10 @@ class BinRunner:
     def _avoid(self) -> np.ndarray | None:
         return np.array(self.failed) if self.failed else None
 
-    def label(self, body_name: str | None, point: np.ndarray, approach: np.ndarray, attempt: int) -> dict[str, Any]:
-        """Analytic labels of the grasp on the object under it (NO_LABELS when it is on none)."""
-        if body_name is None:
+    def label(self, body: int, point: np.ndarray, approach: np.ndarray, attempt: int) -> dict[str, Any]:
+        """Analytic labels of the grasp on object `body`, the one under it (NO_LABELS for -1: none)."""
+        if body < 0:
             return dict(NO_LABELS)
-        body = self.scene.model.body(body_name).id
         record, mesh = self.objects[body]
         world_mesh, com = self.episode.posed_mesh(body, mesh, record.com)
         mass, com = self.episode.loaded(body, record.mass, com)
@@ -227,8 +220,8 @@ class BinRunner:
         ep = self.episode
         approach = np.asarray(approach, float) / np.linalg.norm(approach)
         target = ep.target_at(point, approach)
-        labels = self.label(ep.names.get(target), point, approach, index)
-        result = ep.attempt(point, approach)
+        labels = self.label(target, point, approach, index)
+        result = ep.attempt(point, approach, target)
         if not result.success:
             self.failed.append(np.asarray(point, float))
         grasp = [*np.asarray(point, float).tolist(), *approach.tolist()]

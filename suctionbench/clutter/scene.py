@@ -55,6 +55,15 @@ class PickBinConfig:
         """Height (m) of the inner floor."""
         return self.wall
 
+    def workspace(self, margin: float = 0.005, clearance: float = 0.005, top: float = 1.0
+                  ) -> tuple[np.ndarray, np.ndarray]:
+        """(lower, upper) corners of the bin's inner volume as a world box (Dex-Net's "3D bounds on
+        the workspace"): `margin` inside the walls, from `clearance` above the floor up to `top`."""
+        (cx, cy), (w, d) = self.centre, self.inner
+        lower = np.array([cx - w / 2 + margin, cy - d / 2 + margin, self.floor + clearance])
+        upper = np.array([cx + w / 2 - margin, cy + d / 2 - margin, top])
+        return lower, upper
+
 
 FLOOR_DEPTH = 0.75
 """The room's floor, this far (m) below the table top (a table's usual height)."""

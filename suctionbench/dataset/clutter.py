@@ -18,7 +18,6 @@ import math
 from pathlib import Path
 from typing import Any
 
-import mujoco
 import numpy as np
 
 from suctionbench.clutter.episode import BinEpisode
@@ -28,7 +27,7 @@ from suctionbench.contact import SuctionLabeller
 from suctionbench.dataset.generate import MAX_IMAGES_PER_UNIT, UNIT_FIELDS, _empty, image_object_context
 from suctionbench.geometry.sampling import sample_surface_grasps, smoothed_approaches
 from suctionbench.objects.build import ObjectRecord
-from suctionbench.sensing.camera import DepthRenderer, resolve_camera, sample_camera_pose
+from suctionbench.sensing.camera import DepthRenderer, body_image, resolve_camera, sample_camera_pose
 from suctionbench.sensing.noise import apply_depth_noise
 from suctionbench.sensing.thumbnails import (
     extract_context_thumbnails,
@@ -94,8 +93,7 @@ class _BinUnit:
                 depth = renderer.render(ep.data, self.scene.camera)
                 segmentation = renderer.segment(ep.data, self.scene.camera)
                 noisy = apply_depth_noise(depth, self.rng, c.noise)
-                is_geom = segmentation[..., 1] == mujoco.mjtObj.mjOBJ_GEOM
-                seen = np.where(is_geom, self.scene.model.geom_bodyid[np.clip(segmentation[..., 0], 0, None)], -1)
+                seen = body_image(self.scene.model, segmentation)
                 pool = self._visible(depth)
                 if pool:
                     budget = math.ceil((self.unit.quota - count) / (c.bin_images - image))

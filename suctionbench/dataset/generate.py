@@ -331,6 +331,8 @@ def generate_dataset(
     from suctionbench.sensing.camera import resolve_camera
 
     check_engine(engine)
+    if config.scene not in SCENES:  # before anything is written
+        raise InputError(f"--scene '{config.scene}': unknown (known: {', '.join(SCENES)})")
     if config.datapoints < 1:
         raise InputError(f"--datapoints {config.datapoints}: must be at least 1")
     out = Path(out)
@@ -361,8 +363,6 @@ def generate_dataset(
     }
     write_card(out, card, datapoints_per_shard=config.datapoints_per_shard)
 
-    if config.scene not in SCENES:
-        raise InputError(f"--scene '{config.scene}': unknown (known: {', '.join(SCENES)})")
     units = plan_units(len(object_dirs), config.datapoints, config)
     todo, corrupt = [], []
     for unit in units:

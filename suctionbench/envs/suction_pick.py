@@ -354,9 +354,7 @@ class SuctionPickEnv(gymnasium.Env):
         episode = self._runner.episode
         model, data = episode.model, episode.data
         qpos_ready, ctrl_ready = self._ready
-        qpos = slice(episode.object_qpos, episode.object_qpos + 7)
-        dof = model.jnt_dofadr[model.body_jntadr[episode.object]]
-        qvel = slice(dof, dof + 6)
+        qpos, qvel = episode.qpos_of(episode.object), episode.object_dofs
         object_qpos, object_qvel = data.qpos[qpos].copy(), data.qvel[qvel].copy()
         data.qpos[:], data.qvel[:], data.ctrl[:] = qpos_ready, 0.0, ctrl_ready
         data.qpos[qpos], data.qvel[qvel] = object_qpos, object_qvel

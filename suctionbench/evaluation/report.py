@@ -360,20 +360,39 @@ def _quality_gallery(run_dir: Path, records: list[dict[str, Any]], out: Path, la
     return items
 
 
-def _planned_view(path: Path, record: dict[str, Any]) -> tuple[np.ndarray, tuple[float, float]] | None:
-    """The depth image a trial's policy planned on (its log's first frame) and the image (u, v) of
-    the executed grasp point in that camera; None if the log lacks them."""
+@dataclass(frozen=True)
+class LoggedView:
+    """A log's first depth frame with its camera: what a policy planned on."""
+
+    depth: np.ndarray
+    k: np.ndarray
+    pose: np.ndarray
+    """World-from-camera (OpenCV frame)."""
+
+    def pixel(self, point_world: Any) -> tuple[float, float]:
+        """Image (u, v) of a world point."""
+        p_cam = (np.asarray(point_world, dtype=float)[:3] - self.pose[:3, 3]) @ self.pose[:3, :3]
+        u, v = (self.k @ p_cam)[:2] / p_cam[2]
+        return float(u), float(v)
+
+
+def first_view(path: Path) -> LoggedView | None:
+    """The first depth frame of a run log with its calibration and camera pose; None if it lacks them."""
     from suctionbench.runlog.reader import depth_image, iter_messages
 
     depth_msg = next(iter_messages(path, "/camera/depth"), None)
     calib = next(iter_messages(path, "/camera/calibration"), None)
-    if depth_msg is None or calib is None or not record.get("grasp_world"):
+    if depth_msg is None or calib is None:
         return None
     k = np.asarray(calib[1]["K"], dtype=float).reshape(3, 3)
-    pose = _camera_pose(path)
-    p_cam = (np.asarray(record["grasp_world"][:3]) - pose[:3, 3]) @ pose[:3, :3]
-    u, v = (k @ p_cam)[:2] / p_cam[2]
-    return depth_image(depth_msg[1]), (float(u), float(v))
+    return LoggedView(depth_image(depth_msg[1]), k, _camera_pose(path))
+
+
+def _planned_view(path: Path, record: dict[str, Any]) -> tuple[np.ndarray, tuple[float, float]] | None:
+    """The depth image a trial's policy planned on (its log's first frame) and the image (u, v) of
+    the executed grasp point in that camera; None if the log lacks them."""
+    view = first_view(path) if record.get("grasp_world") else None
+    return None if view is None else (view.depth, view.pixel(record["grasp_world"]))
 
 
 def _camera_pose(path: Path) -> np.ndarray:

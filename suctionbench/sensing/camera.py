@@ -507,6 +507,15 @@ def camera_pose_from_data(model: mujoco.MjModel, data: mujoco.MjData, camera_nam
     return pose
 
 
+def body_image(model: Any, segmentation: np.ndarray) -> np.ndarray:
+    """The body id (H, W) int of every pixel of a segmentation image (`DepthRenderer.segment`) that
+    shows a geom, -1 elsewhere."""
+    import mujoco
+
+    is_geom = segmentation[..., 1] == mujoco.mjtObj.mjOBJ_GEOM
+    return np.where(is_geom, model.geom_bodyid[np.clip(segmentation[..., 0], 0, None)], -1)
+
+
 def render_colour(model: Any, data: Any, camera: str, intrinsics: CameraIntrinsics) -> np.ndarray:
     """A model camera's colour view of a state, (H, W, 3) uint8. The OpenGL context is made and freed
     per call (about 0.2 s): one left for the garbage collector at interpreter exit fails noisily."""

@@ -223,9 +223,18 @@ class PickEpisode:
         """Make `body` (a free object body's id) the object the pick is about: the one whose seal,
         lift, transport and rest the episode judges (a scene with several objects retargets)."""
         self.object = int(body)
-        self.object_qpos = self.model.jnt_qposadr[self.model.body_jntadr[self.object]]
-        object_dof = self.model.jnt_dofadr[self.model.body_jntadr[self.object]]
-        self.object_dofs = slice(object_dof, object_dof + 6)
+        self.object_qpos = self.qpos_of(self.object).start
+        self.object_dofs = self.dofs_of(self.object)
+
+    def qpos_of(self, body: int) -> slice:
+        """The 7 qpos entries (position, quaternion) of a free object body's joint."""
+        adr = int(self.model.jnt_qposadr[self.model.body_jntadr[body]])
+        return slice(adr, adr + 7)
+
+    def dofs_of(self, body: int) -> slice:
+        """The 6 degrees of freedom (qvel entries) of a free object body's joint."""
+        adr = int(self.model.jnt_dofadr[self.model.body_jntadr[body]])
+        return slice(adr, adr + 6)
 
     def _robot_geoms(self) -> np.ndarray:
         """Per geom (ngeom,) bool: whether it belongs to the arm links (not the cup), for collision checks."""
@@ -278,8 +287,7 @@ class PickEpisode:
         c, dt = self.config, self.model.opt.timestep
         window = max(1, round(c.rest_time / dt))
         ids = [self.object] if bodies is None else list(bodies)
-        adr = np.array([self.model.jnt_qposadr[self.model.body_jntadr[b]] for b in ids], dtype=int)
-        qpos = adr[:, None] + np.arange(7)  # (B, 7): position and quaternion of each body
+        qpos = np.array([np.arange(self.qpos_of(b).start, self.qpos_of(b).stop) for b in ids])  # (B, 7)
         mark, still = self.data.qpos[qpos].copy(), 0
         for _ in range(int(c.settle_time / dt)):
             step()
@@ -295,10 +303,11 @@ class PickEpisode:
                 mark, still = now.copy(), 0
         return False
 
-    def _object_radius(self) -> float:
-        """Radius of a sphere about the object's body origin that contains its surface mesh."""
+    def _object_radius(self, body: int | None = None) -> float:
+        """Radius of a sphere about the body origin of the object (or of object `body`) that contains
+        its surface mesh."""
         m = self.model
-        g = self.visual_geom(self.object)
+        g = self.visual_geom(self.object if body is None else body)
         return float(np.linalg.norm(m.geom_pos[g]) + m.geom_rbound[g])
 
     def visual_geom(self, body: int) -> int:

@@ -275,8 +275,9 @@ class PickRunner:
 
     def object_pixels(self, segmentation: np.ndarray) -> np.ndarray:
         """Pixels (H, W) bool where a segmentation image (DepthRenderer.segment) shows the object."""
-        geoms = np.flatnonzero(self.scene.model.geom_bodyid == self.episode.object)
-        return (segmentation[..., 1] == mujoco.mjtObj.mjOBJ_GEOM) & np.isin(segmentation[..., 0], geoms)
+        from suctionbench.sensing.camera import body_image
+
+        return body_image(self.scene.model, segmentation) == self.episode.object
 
     def _plan_from_image(self) -> Any:
         """Run an image policy from the registry on the current observation (world-frame result)."""

@@ -149,8 +149,11 @@ def cause(error: str) -> str:
 
 
 def summarize(files: list[Path]) -> dict:
-    """Merge result files (shards of one run) and count the failures by cause."""
-    results = [r for f in files for r in json.loads(f.read_text())["results"]]
+    """Merge result files (shards of one run) and count the failures by cause. A mesh in several
+    files counts once, as the last file has it (a rerun of some meshes after a change replaces
+    their entries)."""
+    latest = {r["name"]: r for f in files for r in json.loads(f.read_text())["results"]}
+    results = list(latest.values())
     by_group: dict[str, list[dict]] = {}
     for r in results:
         by_group.setdefault(r["name"].split("/")[0], []).append(r)
@@ -173,6 +176,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--groups", default="synthetic,dm_control,pybullet")
     parser.add_argument("--only", default="", help="regex on the mesh names")
+    parser.add_argument("--failed-in", type=Path, help="only the meshes this results file has as failed, of the "
+                        "causes matching --causes")
+    parser.add_argument("--causes", default="", help="regex on the failure causes (with --failed-in)")
     parser.add_argument("--timeout", type=float, default=300.0)
     parser.add_argument("--out", type=Path, help="JSON file with every mesh's outcome")
     parser.add_argument("--merge", type=Path, nargs="+", help="merge these result files (shards) into --out")
@@ -195,6 +201,10 @@ def main() -> None:
     }
     cases = [case for group in args.groups.split(",") for case in makers[group]()]
     cases = [c for c in cases if re.search(args.only, c[0])]
+    if args.failed_in:
+        failed = json.loads(args.failed_in.read_text())["failures_by_cause"]
+        again = {name for label, names in failed.items() if re.search(args.causes, label) for name in names}
+        cases = [c for c in cases if c[0] in again]
     results = []
     for name, path, options in cases:
         result = run_one(name, path, options, folder / "objects", args.timeout)

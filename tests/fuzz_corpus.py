@@ -411,7 +411,7 @@ def cases(p: dict[str, Path]) -> list[Case]:
 
     # objects
     for argv in (["--count", "0"], ["--count", "-1"], ["--seed", "-1"], ["--workers", "-1"],
-                 ["--count", "100000000000"]):
+                 ["--count", "100000000000"], ["--masses", "feathers"]):
         add("objects generate", "objects", "generate", "--count", "1", "--workers", "1", *argv,
             "--out", r / f"corpus_{'_'.join(argv)}")
     add("objects generate", "objects", "generate", "--count", "1", "--out", p["file.txt"])

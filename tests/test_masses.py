@@ -165,6 +165,25 @@ def test_corpus_specs_carry_material_masses():
     assert all(s.mass.lighter for s in specs)  # every corpus model can fall back under the cap
 
 
+def test_the_training_mass_prior_changes_masses_only():
+    # --masses prior draws each shape's make from its own stream (seed, index, 1): shapes and
+    # parameters are the material corpus's, household kinds keep their kind's material, and every
+    # other shape is one of the six makes, each able to fall back to a print under the cap.
+    from suctionbench.objects.corpus import TRAINING_MAKES, corpus_specs
+
+    material, prior = corpus_specs(120, seed=1), corpus_specs(120, seed=1, masses="prior")
+    assert [(s.name, s.generator, s.params) for s in material] == [(s.name, s.generator, s.params) for s in prior]
+    for a, b in zip(material, prior, strict=True):
+        if a.name.endswith("household"):
+            assert b.mass == a.mass
+        else:
+            assert b.mass.source.startswith("training mass prior: ") and b.mass.lighter
+    makes = {s.mass.source for s in prior if not s.name.endswith("household")}
+    assert makes == {f"training mass prior: {make().source.split(': ', 1)[1]}" for make in TRAINING_MAKES}
+    with pytest.raises(InputError, match="--masses 'lead'"):
+        corpus_specs(1, seed=1, masses="lead")
+
+
 def test_pickability_flags_a_lying_triangular_prism():
     # Lying on a rectangular face, a triangular prism's other faces are tilted 60 deg from the
     # horizontal and its ends are vertical: no surface normal within 30 deg of straight down.

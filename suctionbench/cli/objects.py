@@ -188,6 +188,9 @@ def objects_generate(
     count: Annotated[int, typer.Option(help="Number of training objects.")] = 1500,
     out: Annotated[Path, typer.Option(help="Corpus directory (objects are cached there).")] = Path("corpus"),
     workers: Annotated[int, typer.Option(help="Parallel processes (0 = all cores).")] = 0,
+    masses: Annotated[str, typer.Option(help="Object masses: 'material' (each shape's own material) or "
+                                             "'prior' (the training mass prior: carton, print, wood, plastic, "
+                                             "full container, metal).")] = "material",
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
@@ -196,14 +199,19 @@ def objects_generate(
     def body() -> dict[str, Any]:
         from suctionbench.objects.corpus_build import generate_corpus
 
+        from suctionbench.objects.corpus import MASS_MODES
+
         if count < 1:
             raise InputError(f"--count {count}: must be at least 1")
+        if masses not in MASS_MODES:
+            raise InputError(f"--masses '{masses}': one of {', '.join(MASS_MODES)}")
         output_dir(out, "--out")
         train = out / "train"
         cached = sum(1 for p in train.iterdir() if not p.name.startswith(".")) if train.is_dir() else 0
         require_disk(out, max(count - cached, 0) * BYTES_PER_CORPUS_OBJECT, f"--count {count}")
         with progress_bar(count, "generating", not as_json) as advance:
-            summary = generate_corpus(count, seed, out, workers=resolve_workers(workers), progress=advance)
+            summary = generate_corpus(count, seed, out, workers=resolve_workers(workers), progress=advance,
+                                      masses=masses)
         if not as_json:
             print_rows("corpus", [{k: v for k, v in summary.items() if not isinstance(v, dict)}])
         return summary

@@ -350,7 +350,7 @@ class Boom(RuntimeError):
 
 
 def _fail_on_call(monkeypatch, target: str, call: int) -> None:
-    original = getattr(storage, target)
+    original = getattr(storage.writer, target)  # where DatasetWriter looks the helpers up
     calls = {"n": 0}
 
     def failing(*args, **kwargs):
@@ -359,7 +359,7 @@ def _fail_on_call(monkeypatch, target: str, call: int) -> None:
             raise Boom("disk on fire")
         return original(*args, **kwargs)
 
-    monkeypatch.setattr(storage, target, failing)
+    monkeypatch.setattr(storage.writer, target, failing)
 
 
 def test_failed_write_leaves_no_partial_shard(tmp_path, data, monkeypatch):

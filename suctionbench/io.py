@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import hashlib
+import json
 import math
 import os
 import re
@@ -246,3 +247,18 @@ def json_safe(value: Any) -> Any:
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
+
+
+def read_json(path: str | Path, what: str, missing: str, malformed: str = "") -> Any:
+    """The JSON value in `path`, or an InputError "`what` 'path': ..." saying it is missing (with the
+    hint `missing`), unreadable, or malformed (line and message, then `malformed`)."""
+    try:
+        text = Path(path).read_text()
+    except FileNotFoundError:
+        raise InputError(f"{what} '{path}': missing ({missing})") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{what} '{path}': unreadable ({exc})") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{what} '{path}': malformed JSON (line {exc.lineno}: {exc.msg}{malformed})") from None

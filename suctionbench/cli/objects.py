@@ -197,9 +197,8 @@ def objects_generate(
     """Generate (or complete) the training corpus; evaluation objects never appear in it."""
 
     def body() -> dict[str, Any]:
-        from suctionbench.objects.corpus_build import generate_corpus
-
         from suctionbench.objects.corpus import MASS_MODES
+        from suctionbench.objects.corpus_build import generate_corpus
 
         if count < 1:
             raise InputError(f"--count {count}: must be at least 1")

@@ -17,7 +17,7 @@ import numpy as np
 from suctionbench.errors import InputError
 from suctionbench.evaluation.cycle import CYCLE_MODEL, modelled_compute, picks_per_hour
 from suctionbench.evaluation.tasks import Task
-from suctionbench.io import atomic_path, json_safe, publish_dir
+from suctionbench.io import atomic_path, json_safe, publish_dir, read_json
 from suctionbench.validate import BYTES_PER_TRIAL_LOG, output_dir, require_disk
 
 PREDICT_THRESHOLD = 0.5
@@ -207,16 +207,9 @@ def trial_log_name(index: int) -> str:
 def read_run_json(run_dir: Path) -> dict[str, Any]:
     """A run's run.json, checked for what reports need; InputError naming the file otherwise."""
     path = Path(run_dir) / RUN_NAME
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise InputError(f"run '{run_dir}': no run.json (not a suctionbench eval run)") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"run file '{path}': unreadable ({exc})") from None
-    try:
-        run = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError(f"run file '{path}': malformed JSON (line {exc.lineno}: {exc.msg}; truncated?)") from None
+    if not path.exists():
+        raise InputError(f"run '{run_dir}': no run.json (not a suctionbench eval run)")
+    run = read_json(path, "run file", "not a suctionbench eval run", malformed="; truncated?")
     task = run.get("task") if isinstance(run, dict) else None
     problem = (
         "not a JSON object" if not isinstance(run, dict)

@@ -27,7 +27,7 @@ import numpy as np
 import torch
 
 from suctionbench.errors import InputError
-from suctionbench.io import atomic_path, file_digest, json_safe  # noqa: F401  (json_safe: used by train.py)
+from suctionbench.io import atomic_path, file_digest, json_safe, read_json  # noqa: F401  (json_safe: used by train.py)
 from suctionbench.learning.data import NormStats
 from suctionbench.learning.models import IMAGE_SIZE, build_model
 
@@ -153,14 +153,7 @@ def read_model_card(directory: str | Path) -> dict[str, Any]:
     path = Path(directory) / CARD_NAME
     if not Path(directory).is_dir():
         raise InputError(f"model '{directory}': not a directory")
-    try:
-        card = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise InputError(f"model card '{path}': missing (not a trained model directory?)") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"model card '{path}': unreadable ({exc})") from None
-    except json.JSONDecodeError as exc:
-        raise InputError(f"model card '{path}': malformed JSON (line {exc.lineno}: {exc.msg})") from None
+    card = read_json(path, "model card", "not a trained model directory?")
     if not isinstance(card, dict) or card.get("format") != CARD_FORMAT or not isinstance(card.get("arch"), str):
         raise InputError(f"model card '{path}': not a {CARD_FORMAT} card (format or arch missing)")
     return card

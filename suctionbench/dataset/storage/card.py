@@ -8,7 +8,6 @@ would read it. They depend on the format only, never on the writer or the reader
 
 from __future__ import annotations
 
-import json
 import zipfile
 import zlib
 from collections.abc import Mapping
@@ -38,6 +37,7 @@ from suctionbench.dataset.storage.format import (
     shard_file_name,
 )
 from suctionbench.errors import InputError
+from suctionbench.io import read_json
 
 # -- dataset card ----------------------------------------------------------------------------------
 
@@ -74,16 +74,7 @@ def write_card(directory: str | Path, card: Mapping[str, Any], *, datapoints_per
 def read_card(directory: str | Path) -> dict[str, Any]:
     """The dataset card; InputError if it is missing, not JSON, or not a JSON object."""
     path = Path(directory) / CARD_NAME
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise InputError(f"dataset card '{path}': missing (not a dataset directory?)") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"dataset card '{path}': unreadable ({exc})") from None
-    try:
-        card = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError(f"dataset card '{path}': malformed JSON (line {exc.lineno}: {exc.msg})") from None
+    card = read_json(path, "dataset card", "not a dataset directory?")
     if not isinstance(card, dict):
         raise InputError(f"dataset card '{path}': expected a JSON object, got {type(card).__name__}")
     return card

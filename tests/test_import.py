@@ -208,16 +208,16 @@ def import_case(case: Case, root: Path):
 
 
 def third_party_cases() -> list[Case]:
-    """`third_party_meshes` with their expected outcomes: the Kinova hand's main shell and its insert
-    are each open where the other closes them (one 52 mm opening), everything else imports."""
+    """`third_party_meshes` with their expected outcomes: the Kinova hand's insert is a shell open on
+    one side (a 52 mm opening its winding number leaves undecided over more than the volume); the main
+    shell, open where the insert closes it, bounds a solid with 7 % of its volume undecided and is
+    rebuilt; everything else imports."""
     cases = []
     for path in third_party_meshes():
-        error = (
-            r"not watertight: 1 hole up to 51.6 mm across"
-            if path.stem in {"hand_3finger_main", "hand_3finger_insert"}
-            else None
-        )
-        cases.append(Case(f"{path.parent.name}/{path.name}", path, error=error))
+        insert = path.stem == "hand_3finger_insert"
+        error = r"not watertight: 1 hole up to 51.6 mm across.*undecided" if insert else None
+        warning = "rebuilt as the solid the surface bounds" if path.stem == "hand_3finger_main" else None
+        cases.append(Case(f"{path.parent.name}/{path.name}", path, error=error, warning=warning))
     return cases
 
 

@@ -300,7 +300,8 @@ def test_scale_and_units_combine(corpus, tmp_path):
 
 
 def test_winding_numbers_are_one_inside_and_zero_outside():
-    from suctionbench.objects.repair import doubled_share, winding_numbers
+    from suctionbench.objects.repair import doubled_share
+    from suctionbench.objects.winding import winding_numbers
 
     box = _box((0.04, 0.02, 0.01))
     points = np.array([[0.0, 0.0, 0.0], [0.019, 0.009, 0.004], [0.03, 0.0, 0.0], [0.0, 0.0, -0.02]])
@@ -634,7 +635,8 @@ def test_a_cracked_surface_turned_inside_out_is_read_the_other_way_round():
 
 
 def test_an_opening_is_not_rebuilt_and_says_how_undecided_the_inside_is():
-    from suctionbench.objects.repair import AMBIGUOUS_MAX, rebuild_from_winding, solidify
+    from suctionbench.objects.repair import solidify
+    from suctionbench.objects.winding import AMBIGUOUS_MAX, rebuild_from_winding
 
     cup = trimesh.creation.cylinder(radius=0.03, height=0.06, sections=32)  # without its top: a cup,
     cup.update_faces(cup.face_normals[:, 2] < 0.5)  # whose inside no surface decides

@@ -197,13 +197,12 @@ def objects_generate(
     """Generate (or complete) the training corpus; evaluation objects never appear in it."""
 
     def body() -> dict[str, Any]:
-        from suctionbench.objects.corpus import MASS_MODES
+        from suctionbench.objects.corpus import check_mass_mode
         from suctionbench.objects.corpus_build import generate_corpus
 
         if count < 1:
             raise InputError(f"--count {count}: must be at least 1")
-        if masses not in MASS_MODES:
-            raise InputError(f"--masses '{masses}': one of {', '.join(MASS_MODES)}")
+        check_mass_mode(masses)  # before --out is touched
         output_dir(out, "--out")
         train = out / "train"
         cached = sum(1 for p in train.iterdir() if not p.name.startswith(".")) if train.is_dir() else 0

@@ -554,12 +554,17 @@ MASS_MODES = ("material", "prior")
 (`prior_mass`)."""
 
 
+def check_mass_mode(masses: str) -> None:
+    """InputError naming `--masses` unless it is one of MASS_MODES."""
+    if masses not in MASS_MODES:
+        raise InputError(f"--masses '{masses}': one of {', '.join(MASS_MODES)}")
+
+
 def corpus_specs(count: int, seed: int, masses: str = "material") -> list[ObjectSpec]:
     """The first `count` specs of the corpus drawn with `seed` (set "train"), masses as `masses`
     (MASS_MODES)."""
     from suctionbench.objects.shapes import register_all
 
-    if masses not in MASS_MODES:
-        raise InputError(f"--masses '{masses}': one of {', '.join(MASS_MODES)}")
+    check_mass_mode(masses)
     register_all()  # the household share must not depend on what happened to be imported
     return [corpus_spec(seed, i, masses) for i in range(count)]

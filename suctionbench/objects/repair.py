@@ -308,7 +308,8 @@ def solidify(mesh: trimesh.Trimesh, source: str, rebuild: bool = True) -> Solid:
                 try:
                     solid = solidify(rebuilt, source, rebuild=False)
                 except InputError as exc:
-                    undecided = f"; rebuilt from its winding number it is still no solid ({str(exc).split(': ', 1)[1]})"
+                    reason = str(exc).removeprefix(f"{tag}: ")
+                    undecided = f"; rebuilt from its winding number it is still no solid ({reason})"
                 else:
                     what = "no closed body" if not closed else f"{share:.0%} of the surface open"
                     note = (f"{what} (patches that do not meet): rebuilt as the solid the surface bounds "

@@ -21,8 +21,8 @@ about 1 % of the object; its vertices are then snapped back onto the original su
 AMBIGUOUS_MAX = 0.15
 """Largest share of the rebuilt volume where the winding number is between 1/4 and 3/4 (the volume,
 and so the mass, any threshold in that range could add or remove); more is an opening, not a crack.
-Measured (eval/import/README.md): 0-1 % for cracked render meshes and links without a joint face,
-7-9 % for a hand shell and a link with inner patches, over 100 % for a shell open on one side."""
+Measured (eval/import/README.md): 0-1.3 % for most cracked render meshes and links without a joint
+face, 6-11 % for a hand shell and links with inner patches, over 100 % for a shell open on one side."""
 
 
 def winding_numbers(mesh: trimesh.Trimesh, points: np.ndarray) -> np.ndarray:
@@ -68,7 +68,7 @@ def rebuild_from_winding(mesh: trimesh.Trimesh) -> tuple[trimesh.Trimesh | None,
     if rebuilt.volume < 0:
         rebuilt.invert()
     distance_sq, nearest_face, nearest = igl.point_mesh_squared_distance(np.asarray(rebuilt.vertices), vertices, faces)
-    normals = sign * np.asarray(trimesh.Trimesh(vertices, faces, process=False).face_normals)[nearest_face]
+    normals = sign * np.asarray(mesh.face_normals)[nearest_face]
     agree = np.einsum("ij,ij->i", normals, np.asarray(rebuilt.vertex_normals)) > np.cos(np.pi / 4)
     move = (distance_sq <= cell**2) & agree
     level = np.asarray(rebuilt.vertices)

@@ -104,7 +104,8 @@ def lattice_positions(pixels: np.ndarray, angle: float, config: ThumbnailConfig 
 
 def lattice_batch(pixels: np.ndarray, bins: np.ndarray, angles: np.ndarray,
                   config: ThumbnailConfig = THUMBNAIL_GQCNN) -> tuple[np.ndarray, np.ndarray]:
-    """`lattice_positions` for several angles at once: pixel i is turned by angles[bins[i]]. Every
+    """`lattice_positions` for several angles at once: pixel i is turned by angles[bins[i]] (every
+    bin holds at least one pixel: `np.unique`'s inverse indices, as `quality` passes them). Every
     bin's lattice starts at its own pixels' corner and all share one shape (rows, cols), the largest
     any bin needs (a smaller bin's lattice runs on past its pixels), so they stack into one batch:
     sample points (B, rows, cols, 2) = image (u, v) and each pixel's window (N, 2) in its bin's
@@ -116,7 +117,7 @@ def lattice_batch(pixels: np.ndarray, bins: np.ndarray, angles: np.ndarray,
     a_min, b_min = np.full(len(angles), np.inf), np.full(len(angles), np.inf)
     np.minimum.at(a_min, bins, along)
     np.minimum.at(b_min, bins, across)
-    a_min, b_min = (np.floor(np.where(np.isfinite(m), m, 0.0)) for m in (a_min, b_min))  # empty bins: anywhere
+    a_min, b_min = np.floor(a_min), np.floor(b_min)
     windows = np.column_stack([np.rint(along - a_min[bins]), np.rint(across - b_min[bins])]).astype(np.intp)
     rows, cols = int(windows[:, 0].max()) + size, int(windows[:, 1].max()) + size
     a = (np.arange(rows)[None, :] + a_min[:, None])[:, :, None, None]  # (B, rows, 1, 1)

@@ -172,6 +172,32 @@ def test_corpus_specs_are_deterministic_and_prefix_stable():
     assert len({s.name for s in a}) == 30 and all(s.set == "train" for s in a)
 
 
+def test_the_items_size_prior_rescales_generic_shapes_only():
+    # --sizes items draws each generic shape's largest extent from its own stream (seed, index, 2)
+    # and scales the "family" corpus's shape to it: same shapes, household kinds untouched, every
+    # largest extent inside ITEM_SIZES (log-uniform there, so the median lies near the geometric
+    # mean sqrt(0.04 * 0.245) = 9.9 cm, above the family ranges' 8-9 cm).
+    from suctionbench.objects.corpus import ITEM_SIZES, corpus_specs
+    from suctionbench.objects.shapes import make_shape
+
+    family, items = corpus_specs(40, seed=2), corpus_specs(40, seed=2, sizes="items")
+    generic = 0
+    for a, b in zip(family, items, strict=True):
+        assert a.name == b.name and a.mass.source == b.mass.source
+        if a.name.endswith("household"):
+            assert (b.generator, b.params) == (a.generator, a.params)
+            continue
+        generic += 1
+        assert b.generator == "scaled" and (b.params["generator"], b.params["params"]) == (a.generator, a.params)
+        largest = make_shape(b.generator, b.params).extents.max()
+        assert ITEM_SIZES[0] * (1 - 1e-5) <= largest <= ITEM_SIZES[1] * (1 + 1e-5)
+        ratio = largest / make_shape(a.generator, a.params).extents.max()
+        assert ratio == pytest.approx(b.params["factor"], rel=1e-6)
+    assert generic >= 25
+    with pytest.raises(InputError, match="--sizes 'huge'"):
+        corpus_specs(1, seed=2, sizes="huge")
+
+
 def test_corpus_is_disjoint_from_the_evaluation_sets(tmp_path):
     from suctionbench.objects.corpus_build import evaluation_fingerprints, generate_corpus
 

@@ -191,25 +191,28 @@ def objects_generate(
     masses: Annotated[str, typer.Option(help="Object masses: 'material' (each shape's own material) or "
                                              "'prior' (the training mass prior: carton, print, wood, plastic, "
                                              "full container, metal).")] = "material",
+    sizes: Annotated[str, typer.Option(help="Object sizes: 'family' (each shape family's own range) or 'items' "
+                                            "(generic shapes scaled to real items' 4-24.5 cm).")] = "family",
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
     """Generate (or complete) the training corpus; evaluation objects never appear in it."""
 
     def body() -> dict[str, Any]:
-        from suctionbench.objects.corpus import check_mass_mode
+        from suctionbench.objects.corpus import check_mass_mode, check_size_mode
         from suctionbench.objects.corpus_build import generate_corpus
 
         if count < 1:
             raise InputError(f"--count {count}: must be at least 1")
         check_mass_mode(masses)  # before --out is touched
+        check_size_mode(sizes)
         output_dir(out, "--out")
         train = out / "train"
         cached = sum(1 for p in train.iterdir() if not p.name.startswith(".")) if train.is_dir() else 0
         require_disk(out, max(count - cached, 0) * BYTES_PER_CORPUS_OBJECT, f"--count {count}")
         with progress_bar(count, "generating", not as_json) as advance:
             summary = generate_corpus(count, seed, out, workers=resolve_workers(workers), progress=advance,
-                                      masses=masses)
+                                      masses=masses, sizes=sizes)
         if not as_json:
             print_rows("corpus", [{k: v for k, v in summary.items() if not isinstance(v, dict)}])
         return summary

@@ -464,25 +464,36 @@ def check_shape(mesh: trimesh.Trimesh) -> str | None:
     return None
 
 
-def corpus_spec(seed: int, index: int, masses: str = "material") -> ObjectSpec:
+def corpus_spec(seed: int, index: int, masses: str = "material", sizes: str = "family") -> ObjectSpec:
     """Spec `index` of the corpus drawn with `seed`: depends only on (seed, index) (and `masses`,
-    MASS_MODES, which sets its mass and nothing else).
+    MASS_MODES, which sets its mass and nothing else, and `sizes`, SIZE_MODES, which sets its
+    scale and, through it, its mass).
 
     The category is drawn first, always from the full CORPUS_CATEGORIES (a household draw becomes
     composite when no household generator is registered, so other specs do not shift). Then
     parameters are drawn and the shape built and checked, up to MAX_TRIES times from the same
-    stream; if every draw fails, a primitive is used (primitives always pass).
+    stream; if every draw fails, a primitive is used (primitives always pass). With `sizes`
+    "items" a generic shape is scaled to a largest extent drawn from its own stream
+    (seed, index, 2), so the shapes are those of the "family" corpus at other sizes.
     """
     rng = np.random.default_rng((seed, index))
+    size_rng = np.random.default_rng((seed, index, 2))
     names = list(CORPUS_CATEGORIES)
     category = names[int(rng.choice(len(names), p=np.asarray([CORPUS_CATEGORIES[n] for n in names])))]
     if category == "household" and not household_generators():
         category = "composite"
+    rescale = sizes == "items" and category != "household"
     for _ in range(MAX_TRIES):
         gen, params = SAMPLERS[category](rng)
         params = plain(params)
+        largest = _log_uniform(size_rng, *ITEM_SIZES) if rescale else None
         try:
-            problem = check_shape(make_shape(gen, params))
+            mesh = make_shape(gen, params)
+            if largest is not None:
+                gen, params = "scaled", plain({"generator": gen, "params": params,
+                                              "factor": largest / float(mesh.extents.max())})
+                mesh = make_shape(gen, params)
+            problem = check_shape(mesh)
         except Exception as exc:  # any generator error (bad parameter combination) means: redraw
             problem = f"{type(exc).__name__}: {exc}"
         if problem is None:
@@ -491,14 +502,42 @@ def corpus_spec(seed: int, index: int, masses: str = "material") -> ObjectSpec:
         category = "primitive"
         gen, params = sample_primitive(rng)
         params = plain(params)
+    kind = params["generator"] if gen == "scaled" else gen
+    scaled = f", scaled x{params['factor']:.3g}" if gen == "scaled" else ""
     return ObjectSpec(
         name=f"train_{index:05d}_{category}",
         set="train",
         generator=gen,
         params=params,
-        description=f"training corpus: {category} ({gen})",
-        mass=corpus_mass(gen) if masses == "material" else prior_mass(gen, np.random.default_rng((seed, index, 1))),
+        description=f"training corpus: {category} ({kind}{scaled})",
+        mass=corpus_mass(kind) if masses == "material" else prior_mass(kind, np.random.default_rng((seed, index, 1))),
     )
+
+
+ITEM_SIZES = (0.04, 0.245)
+"""Largest extent (m) of a generic corpus shape under `--sizes items`, drawn log-uniformly: the
+span of the household goods a 15 mm cup picks, from a matchbox or a D cell (4-6 cm) to a cereal
+box or a shoe box (22-25 cm; the upper end stays inside SIZE_RANGE after rounding). The families'
+own ranges ("family") centre on 8-9 cm (blobs 5.6 cm): half the corpus is smaller than a tin of
+tuna, while real items, such as the evaluation sets' (4-25 cm, median 12-13 cm), are larger."""
+
+SIZE_MODES = ("family", "items")
+"""`objects generate --sizes`: each family's own size range (the shipped corpus), or the generic
+families scaled to ITEM_SIZES (household kinds keep their real sizes either way)."""
+
+
+def check_size_mode(sizes: str) -> None:
+    """InputError naming `--sizes` unless it is one of SIZE_MODES."""
+    if sizes not in SIZE_MODES:
+        raise InputError(f"--sizes '{sizes}': one of {', '.join(SIZE_MODES)}")
+
+
+@generator("scaled")
+def scaled(generator: str, params: Params, factor: float) -> trimesh.Trimesh:
+    """Another generator's shape scaled uniformly by `factor` (the corpus' size prior)."""
+    mesh = make_shape(generator, params).copy()
+    mesh.apply_scale(factor)
+    return mesh
 
 
 def corpus_mass(generator_name: str) -> MassModel:
@@ -560,11 +599,12 @@ def check_mass_mode(masses: str) -> None:
         raise InputError(f"--masses '{masses}': one of {', '.join(MASS_MODES)}")
 
 
-def corpus_specs(count: int, seed: int, masses: str = "material") -> list[ObjectSpec]:
+def corpus_specs(count: int, seed: int, masses: str = "material", sizes: str = "family") -> list[ObjectSpec]:
     """The first `count` specs of the corpus drawn with `seed` (set "train"), masses as `masses`
-    (MASS_MODES)."""
+    (MASS_MODES), sizes as `sizes` (SIZE_MODES)."""
     from suctionbench.objects.shapes import register_all
 
     check_mass_mode(masses)
+    check_size_mode(sizes)
     register_all()  # the household share must not depend on what happened to be imported
-    return [corpus_spec(seed, i, masses) for i in range(count)]
+    return [corpus_spec(seed, i, masses, sizes) for i in range(count)]

@@ -49,14 +49,15 @@ def _spec_key(spec: Any) -> str:
 
 def generate_corpus(
     count: int, seed: int, out: Path, *, workers: int = 1, progress: Callable[[int], None] | None = None,
-    masses: str = "material",
+    masses: str = "material", sizes: str = "family",
 ) -> dict[str, Any]:
     """Build `count` corpus objects into out/train/ (reusing cached ones); write out/corpus.json.
-    `masses`: each shape's own material or the training mass prior (corpus.MASS_MODES)."""
+    `masses`: each shape's own material or the training mass prior (corpus.MASS_MODES); `sizes`:
+    each family's own size range or real items' (corpus.SIZE_MODES)."""
     from suctionbench.objects.corpus import corpus_specs
 
     start = time.perf_counter()
-    specs = corpus_specs(count, seed, masses)
+    specs = corpus_specs(count, seed, masses, sizes)
     eval_hashes, eval_keys = evaluation_fingerprints()
     clashing = [s.name for s in specs if _spec_key(s) in eval_keys]
     if clashing:
@@ -83,6 +84,7 @@ def generate_corpus(
         "count": count,
         "seed": seed,
         "masses": masses,
+        "sizes": sizes,
         "categories": dict(sorted(categories.items())),
         "objects": [{"name": r.name, "generator": r.generator, "geometry_hash": r.geometry_hash} for r in ordered],
     }
@@ -92,6 +94,7 @@ def generate_corpus(
         "count": count,
         "seed": seed,
         "masses": masses,
+        "sizes": sizes,
         "built": len(todo),
         "cached": count - len(todo),
         "seconds": round(time.perf_counter() - start, 1),

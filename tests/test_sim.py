@@ -18,6 +18,7 @@ from suctionbench.config import CUP_DEFAULT, STANDARD_GRAVITY
 from suctionbench.objects.build import build_object
 from suctionbench.objects.registry import list_objects, load_object
 from suctionbench.objects.spec import SETS, ObjectSpec
+from suctionbench.sim.episode import EpisodeConfig
 from suctionbench.sim.ik import solve_ik
 from suctionbench.sim.pick import PickRequest, PickRunner
 from suctionbench.sim.yumi import HOME_RIGHT, RIGHT_ARM_JOINTS
@@ -101,6 +102,20 @@ def test_a_dropped_object_is_at_rest_when_the_grasp_is_chosen():
     turn = np.arccos(np.clip((np.trace(before[:3, :3].T @ after[:3, :3]) - 1.0) / 2.0, -1.0, 1.0))
     assert np.linalg.norm(after[:3, 3] - before[:3, 3]) < 2 * episode.config.rest_motion
     assert np.degrees(turn) < 0.5
+
+
+def test_a_jar_rocking_on_its_side_comes_to_rest_within_the_settle_time():
+    # The wide jar lying on its side, its centre of mass off its axis, rocks about that axis like
+    # a roly-poly; with nothing but rolling resistance (0.1 mm lever) to damp it, the drop of this
+    # typical-benchmark seed still moves at 6 s (the old limit: an invalid trial) and is at rest
+    # before the 8 s limit. The limit only cuts a placement short: the same drop is the same pose.
+    short = PickRunner(PickRequest("typical/jar_wide", seed=542567736, episode=EpisodeConfig(settle_time=6.0)))
+    short.reset()
+    assert short.episode.placement_error is not None
+    runner = PickRunner(PickRequest("typical/jar_wide", seed=542567736))
+    runner.reset()
+    assert runner.episode.placement_error is None
+    assert 6.0 < runner.episode.data.time < runner.episode.config.settle_time
 
 
 def test_grasp_across_a_box_edge_never_seals():

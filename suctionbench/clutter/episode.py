@@ -73,6 +73,12 @@ class BinEpisodeConfig:
     carried_height: float = 0.03
     """The lift raises the held object's lowest point this far (m) above the rim and the pile."""
 
+    settle_time: float = 6.0
+    """Longest wait (s) for the pile to come to rest after a drop or an attempt. A pile's own
+    limit, apart from the single object's `EpisodeConfig.settle_time`: objects leaning on each
+    other creep in MuJoCo's soft contacts and may never pass the rest test, so every wait that
+    reaches this limit costs its full length and moves the pile on."""
+
 
 @dataclass
 class AttemptResult:
@@ -119,7 +125,7 @@ class BinEpisode(PickEpisode):
         self.spilled: list[str] = []
         """Objects that would not stay in the bin while it was filled (not part of this scene)."""
         self.unsettled = 0
-        """How often the pile was still moving at the end of `EpisodeConfig.settle_time` (after a
+        """How often the pile was still moving at the end of `BinEpisodeConfig.settle_time` (after a
         drop or an attempt): objects leaning on each other creep by up to about 1 mm/s in MuJoCo's
         soft contacts; the next attempt goes ahead on the pile as it is."""
         self._geoms = {b: np.flatnonzero((m.geom_bodyid == b) & ((m.geom_contype != 0) | (m.geom_conaffinity != 0)))
@@ -159,7 +165,7 @@ class BinEpisode(PickEpisode):
             for attempt in range(c.retries + 1):
                 self._drop(b, rng, shrink=attempt / (c.retries + 1))
                 try:
-                    settled = self.settle(lambda: self._step(q_hold), [*self.present, b])
+                    settled = self.settle(lambda: self._step(q_hold), [*self.present, b], self.bin_episode.settle_time)
                 except _Unstable as exc:  # the pile exploded: nothing to pick
                     self.placement_error = f"while filling the bin: {exc}"
                     return
@@ -341,7 +347,7 @@ class BinEpisode(PickEpisode):
         if not self.present:
             return
         try:
-            if not self.settle(lambda: self._step(q_hold), self.present):
+            if not self.settle(lambda: self._step(q_hold), self.present, self.bin_episode.settle_time):
                 self.unsettled += 1
         except _Unstable as exc:
             self.placement_error = f"after the attempt: {exc}"

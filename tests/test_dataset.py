@@ -244,3 +244,74 @@ def test_a_passed_check_is_trusted_until_a_file_changes(reference, tmp_path, mon
     shard.write_bytes(bytes(blob))
     with pytest.raises(InputError, match="sha256|hash|manifest"):
         verify.check_dataset(data)
+
+
+def test_spaced_top_keeps_the_best_grasps_a_spacing_apart():
+    # Greedy non-maximum suppression: in order of falling q, a grasp is kept unless one already
+    # kept lies closer than the spacing (10 mm). q 0.9 (x = 0) is kept; 0.8 (5 mm from it) is not;
+    # 0.7 (12 mm) is; 0.6 (20 mm: 8 mm from 0.7's) is not; 0.5 (30 mm: 18 mm from 0.7's) is.
+    from suctionbench.dataset.proposals import spaced_top
+
+    q = np.array([0.6, 0.9, 0.5, 0.8, 0.7])
+    points = np.array([[0.020, 0, 0], [0, 0, 0], [0.030, 0, 0], [0.005, 0, 0], [0.012, 0, 0]])
+    assert spaced_top(q, points, 5, 0.01).tolist() == [1, 4, 2]
+    assert spaced_top(q, points, 2, 0.01).tolist() == [1, 4]
+    assert spaced_top(q, points, 5, 0.0).tolist() == [1, 3, 4, 0, 2]
+
+
+def test_proposals_are_the_policys_grasps_labelled_first_on_each_image(monkeypatch):
+    # generate --proposals: on every image the dense policy's best grasps (at most K, 1 cm apart)
+    # come first, with ids -1, -2, ...; their labels are the labeller's verdict on exactly those
+    # grasps, taken into the object's frame, with the seed (seed, unit, image, 2).
+    from suctionbench.dataset import proposals as prop
+    from suctionbench.dataset.render import TableScene
+    from suctionbench.policies.gqcnn import default_model_dir
+
+    seen: list[tuple[np.ndarray, np.ndarray]] = []  # object pose, camera pose per render
+    proposed: list[tuple[np.ndarray, np.ndarray]] = []  # camera-frame points, approaches per image
+    render, propose = TableScene.render, prop.Proposer.propose
+
+    def spy_render(self, object_pose, camera_pose):
+        seen.append((np.array(object_pose), np.array(camera_pose)))
+        return render(self, object_pose, camera_pose)
+
+    def spy_propose(self, *args):
+        out = propose(self, *args)
+        proposed.append(out)
+        return out
+
+    monkeypatch.setattr(TableScene, "render", spy_render)
+    monkeypatch.setattr(prop.Proposer, "propose", spy_propose)
+    config = gen.GenerationConfig(datapoints=40, seed=3, grasps_per_object=40, stable_poses=2,
+                                  proposals=str(default_model_dir()), proposals_per_image=3)
+    record = load_object(KEYS[0])
+    arrays = gen.generate_unit(gen.Unit(0, 40), str(record.directory), "primesense", config)
+    ids, images, poses = arrays["grasp_labels"], arrays["image_labels"], arrays["pose_labels"]
+    checked = 0
+    for image, ((object_pose, camera_pose), (points, approaches)) in enumerate(zip(seen, proposed, strict=True)):
+        rows = np.flatnonzero(images == image)
+        k = len(points)
+        assert 1 <= k <= 3 and ids[rows[:k]].tolist() == [-1 - i for i in range(k)] and (ids[rows[k:]] >= 0).all()
+        if k > 1:
+            gaps = np.linalg.norm(points[:, None] - points[None], axis=2)[np.triu_indices(k, 1)]
+            assert gaps.min() >= prop.PROPOSAL_SPACING
+        world = points @ camera_pose[:3, :3].T + camera_pose[:3, 3]
+        turn, shift = object_pose[:3, :3], object_pose[:3, 3]
+        s = int(poses[rows[0]])
+        gravity = np.asarray(record.stable_poses[s]["transform"])[:3, :3].T @ np.array([0.0, 0.0, -STANDARD_GRAVITY])
+        labeller = SuctionLabeller(record.mesh(), config.label, mass=record.mass, com=record.com, gravity=gravity)
+        seed = int(np.random.SeedSequence((config.seed, 0, image, 2)).generate_state(1)[0])
+        labels = labeller.label((world - shift) @ turn, approaches @ camera_pose[:3, :3].T @ turn, seed,
+                                metrics=("wr", "rwr"))
+        np.testing.assert_allclose(arrays["robust_suction_wrench_resistance"][rows[:k]], labels.rwr, atol=1e-7)
+        np.testing.assert_array_equal(arrays["seal_flags"][rows[:k]], labels.seal.seal)
+        checked += k
+    assert checked >= 3
+
+
+def test_proposals_need_a_trained_model(tmp_path):
+    record = load_object(KEYS[0])
+    config = gen.GenerationConfig(datapoints=10, proposals=str(tmp_path / "no_model"))
+    with pytest.raises(InputError, match="--proposals .*no_model.*not a trained model"):
+        gen.generate_dataset(tmp_path / "x", [str(record.directory)], KEYS[:1], "primesense", config)
+    assert not (tmp_path / "x").exists()

@@ -52,6 +52,10 @@ def generate(
     scene: Annotated[str, typer.Option(help="table (one object in a stable pose, the paper's) or bin (a cluttered "
                                             "bin per 1,000 datapoints: grasps labelled on their own object, "
                                             "0 where the gripper's path meets a neighbour or a wall).")] = "table",
+    proposals: Annotated[Path | None, typer.Option(help="A trained model's directory: label its dense policy's best "
+                                                       "grasps on every image too (on-policy data).")] = None,
+    proposals_per_image: Annotated[int, typer.Option(help="With --proposals: the policy's best grasps per image "
+                                                          "(at least 1 cm apart).")] = 8,
     resume: Annotated[bool, typer.Option(help="Continue an interrupted run with the same configuration.")] = False,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing dataset.")] = False,
     seed: SeedOpt = 0,
@@ -65,6 +69,10 @@ def generate(
         from suctionbench.objects.registry import resolve_objects
 
         label = label_config(cup_preset(cup), load)
+        if proposals is not None and scene != "table":
+            raise InputError(f"--proposals with --scene {scene}: on-policy grasps are proposed on table scenes only")
+        if proposals_per_image < 1:
+            raise InputError(f"--proposals-per-image {proposals_per_image}: must be at least 1")
         output_dir(out, "--out")
         require_disk(out, datapoints * BYTES_PER_DATAPOINT, f"--datapoints {datapoints}")
         require_memory(label_memory(grasps_per_object, label.perturbation.num_samples)
@@ -72,7 +80,8 @@ def generate(
         records = resolve_objects(objects)
         config = GenerationConfig(
             datapoints=datapoints, seed=seed, grasps_per_object=grasps_per_object,
-            label=label, scene=scene,
+            label=label, scene=scene, proposals=None if proposals is None else str(proposals.resolve()),
+            proposals_per_image=proposals_per_image,
         )
         start = time.perf_counter()
         with progress_bar(datapoints, "generating", not as_json) as advance:

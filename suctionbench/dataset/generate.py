@@ -113,6 +113,14 @@ class GenerationConfig:
     bin_datapoints: int = 1000
     """Scene "bin": datapoints per bin (the unit's quota)."""
 
+    proposals: str | None = None
+    """A trained model's directory: on every image its dense policy's best grasps
+    (`dataset.proposals`) are labelled and recorded first, before the uniform surface grasps fill
+    the rest of the image's share (grasp id -1 - rank). None: uniform surface grasps only."""
+
+    proposals_per_image: int = 8
+    """With `proposals`: how many of the policy's best grasps (at least 1 cm apart) per image."""
+
 
 @dataclass(frozen=True)
 class Unit:
@@ -141,8 +149,17 @@ def plan_units(num_objects: int, datapoints: int, config: GenerationConfig | Non
 
 
 def config_fingerprint(config: GenerationConfig, camera: dict[str, Any], objects: list[str]) -> str:
-    """Hash of everything that determines the data: a resumed run must match it exactly."""
-    blob = json.dumps({"config": to_dict(config), "camera": camera, "objects": objects}, sort_keys=True)
+    """Hash of everything that determines the data: a resumed run must match it exactly (with
+    `proposals`, the proposing model's weights too)."""
+    from suctionbench.dataset.proposals import model_fingerprint
+
+    settings = to_dict(config)
+    what: dict[str, Any] = {"config": settings, "camera": camera, "objects": objects}
+    if config.proposals is None:  # datasets from before proposals existed keep their fingerprint
+        del settings["proposals"], settings["proposals_per_image"]
+    else:
+        what["proposal_weights"] = model_fingerprint(config.proposals)
+    blob = json.dumps(what, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
 
@@ -172,21 +189,53 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
         use = rng.random(len(points)) < config.smoothed_approach_fraction
         approaches = np.where(use[:, None], smoothed, approaches)
     poses = [np.asarray(p["transform"]) for p in record.stable_poses[: config.stable_poses]]
+    labellers: dict[int, Any] = {}
     labels: dict[int, Any] = {}
 
-    def labels_in_pose(s: int) -> Any:
-        """Robust labels of all candidates in stable pose s (gravity rotated into the pose),
-        computed on first use: each pose has its own seed, so laziness changes no value."""
-        if s not in labels:
+    def labeller_in_pose(s: int) -> Any:
+        """The labeller of stable pose s (gravity rotated into the pose)."""
+        if s not in labellers:
             gravity = poses[s][:3, :3].T @ np.array([0.0, 0.0, -STANDARD_GRAVITY])
-            labeller = SuctionLabeller(mesh, config.label, mass=record.mass, com=np.asarray(record.com),
-                                       gravity=gravity)
+            labellers[s] = SuctionLabeller(mesh, config.label, mass=record.mass, com=np.asarray(record.com),
+                                           gravity=gravity)
+        return labellers[s]
+
+    def labels_in_pose(s: int) -> Any:
+        """Robust labels of all candidates in stable pose s, computed on first use: each pose has
+        its own seed, so laziness changes no value."""
+        if s not in labels:
             label_seed = int(np.random.SeedSequence((config.seed, unit.index, s)).generate_state(1)[0])
-            labels[s] = labeller.label(points, approaches, label_seed, metrics=("wr", "rwr"))
+            labels[s] = labeller_in_pose(s).label(points, approaches, label_seed, metrics=("wr", "rwr"))
         return labels[s]
 
+    proposer = None
+    if config.proposals is not None:
+        from suctionbench.dataset.proposals import proposer as cached_proposer
+
+        proposer = cached_proposer(config.proposals, config.proposals_per_image)
     camera_config = CameraPoseConfig().for_camera(intrinsics)
     out: dict[str, list[np.ndarray]] = {name: [] for name in UNIT_FIELDS}
+
+    def record_grasps(noisy: np.ndarray, depth: np.ndarray, camera_pose: np.ndarray, image: int, s: int,
+                      p_world: np.ndarray, v_world: np.ndarray, v_cam: np.ndarray, pixels: np.ndarray,
+                      depths: np.ndarray, angles: np.ndarray, lab: Any, rows: Any, ids: np.ndarray) -> None:
+        """Append the datapoints of grasps seen on one image: rows `rows` of the labels `lab`,
+        candidate ids `ids`."""
+        out["depth_ims_tf_table"].append(extract_thumbnails(noisy, pixels, angles)[..., None].astype(np.float32))
+        context = extract_context_thumbnails(noisy, pixels, angles)
+        out["context_ims_tf_table"].append(context[..., None].astype(np.float32))
+        out["object_context"].append(image_object_context(intrinsics, depth, noisy, camera_pose, pixels, p_world,
+                                                          v_world))
+        out["hand_poses"].append(np.column_stack([pixels[:, 1], pixels[:, 0], pose_vector(depths, v_world), v_cam])
+                                 .astype(np.float32))
+        out["robust_suction_wrench_resistance"].append(lab.rwr[rows].astype(np.float32))
+        out["object_labels"].append(np.full(len(ids), unit.index, np.int32))
+        out["pose_labels"].append(np.full(len(ids), s, np.int32))
+        out["image_labels"].append(np.full(len(ids), unit.index * MAX_IMAGES_PER_UNIT + image, np.int32))
+        out["grasp_labels"].append(ids.astype(np.int32))
+        out["seal_flags"].append(lab.seal.seal[rows].astype(np.uint8))
+        out["wrench_resistance"].append(lab.wr[rows].astype(np.uint8))
+
     count = 0
     with TableScene(record, intrinsics) as scene:
         for image in range(config.max_images_per_object):
@@ -202,32 +251,33 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
             camera_pose = sample_camera_pose(rng, np.zeros(3), camera_config)
             depth = scene.render(object_pose, camera_pose)
             noisy = apply_depth_noise(depth, rng, config.noise)
+            rot, origin = camera_pose[:3, :3], camera_pose[:3, 3]
+            if proposer is not None:  # the policy's own best grasps first (module dataset.proposals)
+                mask = (intrinsics.deproject(depth) @ rot[2] + origin[2]) > OBJECT_CLEARANCE  # the render's object
+                q_cam, a_cam = proposer.propose(noisy, mask, intrinsics, camera_pose,
+                                                np.random.default_rng((config.seed, unit.index, image, 1)))
+                q_world, a_world = q_cam @ rot.T + origin, a_cam @ rot.T
+                steep = np.flatnonzero(-a_world[:, 2] >= math.cos(config.max_approach_angle))[: unit.quota - count]
+                if len(steep):
+                    q_cam, a_cam, q_world, a_world = q_cam[steep], a_cam[steep], q_world[steep], a_world[steep]
+                    at, depths, angles = project_grasps(q_cam, a_cam, intrinsics)
+                    turn, shift = object_pose[:3, :3], object_pose[:3, 3]
+                    seed = int(np.random.SeedSequence((config.seed, unit.index, image, 2)).generate_state(1)[0])
+                    lab = labeller_in_pose(s).label((q_world - shift) @ turn, a_world @ turn, seed,
+                                                    metrics=("wr", "rwr"))
+                    record_grasps(noisy, depth, camera_pose, image, s, q_world, a_world, a_cam, at, depths, angles,
+                                  lab, slice(None), -1 - np.arange(len(steep)))
+                    count += len(steep)
             p_world = points @ object_pose[:3, :3].T + object_pose[:3, 3]
             v_world = approaches @ object_pose[:3, :3].T
-            rot, origin = camera_pose[:3, :3], camera_pose[:3, 3]
             p_cam, v_cam = (p_world - origin) @ rot, v_world @ rot
             pixels, depths, angles = project_grasps(p_cam, v_cam, intrinsics)
             keep = visible_mask(pixels, depths, depth) & (-v_world[:, 2] >= math.cos(config.max_approach_angle))
             idx = np.flatnonzero(keep)[: unit.quota - count]
             if len(idx) == 0:
                 continue
-            thumbs = extract_thumbnails(noisy, pixels[idx], angles[idx])
-            pose_vec = pose_vector(depths[idx], v_world[idx])
-            lab = labels_in_pose(s)
-            out["depth_ims_tf_table"].append(thumbs[..., None].astype(np.float32))
-            context = extract_context_thumbnails(noisy, pixels[idx], angles[idx])
-            out["context_ims_tf_table"].append(context[..., None].astype(np.float32))
-            out["object_context"].append(image_object_context(intrinsics, depth, noisy, camera_pose, pixels[idx],
-                                                              p_world[idx], v_world[idx]))
-            out["hand_poses"].append(np.column_stack([pixels[idx, 1], pixels[idx, 0], pose_vec, v_cam[idx]])
-                                     .astype(np.float32))
-            out["robust_suction_wrench_resistance"].append(lab.rwr[idx].astype(np.float32))
-            out["object_labels"].append(np.full(len(idx), unit.index, np.int32))
-            out["pose_labels"].append(np.full(len(idx), s, np.int32))
-            out["image_labels"].append(np.full(len(idx), unit.index * MAX_IMAGES_PER_UNIT + image, np.int32))
-            out["grasp_labels"].append(idx.astype(np.int32))
-            out["seal_flags"].append(lab.seal.seal[idx].astype(np.uint8))
-            out["wrench_resistance"].append(lab.wr[idx].astype(np.uint8))
+            record_grasps(noisy, depth, camera_pose, image, s, p_world[idx], v_world[idx], v_cam[idx], pixels[idx],
+                          depths[idx], angles[idx], labels_in_pose(s), idx, idx)
             count += len(idx)
     return {name: np.concatenate(parts) if parts else _empty(name) for name, parts in out.items()}
 

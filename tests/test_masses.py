@@ -169,7 +169,8 @@ def test_the_training_mass_prior_changes_masses_only():
     # --masses prior draws each shape's make from its own stream (seed, index, 1): shapes and
     # parameters are the material corpus's, household kinds keep their kind's material, and every
     # other shape is one of the six makes, each able to fall back to a print under the cap.
-    from suctionbench.objects.corpus import TRAINING_MAKES, corpus_specs
+    from suctionbench.objects.corpus import corpus_specs
+    from suctionbench.objects.corpus_priors import TRAINING_MAKES
 
     material, prior = corpus_specs(120, seed=1), corpus_specs(120, seed=1, masses="prior")
     assert [(s.name, s.generator, s.params) for s in material] == [(s.name, s.generator, s.params) for s in prior]

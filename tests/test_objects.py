@@ -177,7 +177,8 @@ def test_the_items_size_prior_rescales_generic_shapes_only():
     # and scales the "family" corpus's shape to it: same shapes, household kinds untouched, every
     # largest extent inside ITEM_SIZES (log-uniform there, so the median lies near the geometric
     # mean sqrt(0.04 * 0.245) = 9.9 cm, above the family ranges' 8-9 cm).
-    from suctionbench.objects.corpus import ITEM_SIZES, corpus_specs
+    from suctionbench.objects.corpus import corpus_specs
+    from suctionbench.objects.corpus_priors import ITEM_SIZES
     from suctionbench.objects.shapes import make_shape
 
     family, items = corpus_specs(40, seed=2), corpus_specs(40, seed=2, sizes="items")

@@ -199,8 +199,8 @@ def objects_generate(
     """Generate (or complete) the training corpus; evaluation objects never appear in it."""
 
     def body() -> dict[str, Any]:
-        from suctionbench.objects.corpus import check_mass_mode, check_size_mode
         from suctionbench.objects.corpus_build import generate_corpus
+        from suctionbench.objects.corpus_priors import check_mass_mode, check_size_mode
 
         if count < 1:
             raise InputError(f"--count {count}: must be at least 1")

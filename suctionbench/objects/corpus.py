@@ -7,8 +7,9 @@ bosses, pockets, holes, brackets) and smooth blobs (free-form curvature). See CO
 
 Spec i of a corpus depends only on (seed, i): its random stream is np.random.default_rng((seed, i)),
 so any slice can be regenerated alone. Every draw is built and checked (watertight, one body,
-2-25 cm, at most MAX_FACES faces); a draw that fails is redrawn from the same stream. Masses come
-from named materials (`corpus_mass`) under the same cap as the evaluation sets.
+2-25 cm, at most MAX_FACES faces); a draw that fails is redrawn from the same stream. What each
+shape weighs and its scale come from `objects.corpus_priors` (named materials under the evaluation
+sets' mass cap by default; `--masses prior`, `--sizes items`).
 """
 
 from __future__ import annotations

@@ -732,3 +732,44 @@ def test_cli_train_and_show(dataset, tmp_path):
     assert result.exit_code == 2
     result = runner.invoke(app, ["model", "show", str(tmp_path / "nope"), "--json"])
     assert result.exit_code == 2
+
+
+def test_the_saved_weights_are_the_moving_average_of_the_iterates(dataset, tmp_path, monkeypatch):
+    # --average d: after every SGD step k the average is a_1 = w_1, a_k = d a_(k-1) + (1 - d) w_k
+    # (an exponential moving average, Polyak averaging); the averaged network is the one scored and
+    # saved. Recomputed here from the iterates the trainer hands to the average.
+    iterates: list[dict[str, torch.Tensor]] = []
+    update = torch.optim.swa_utils.AveragedModel.update_parameters
+
+    def spy(self, model):
+        iterates.append({k: v.detach().clone() for k, v in model.named_parameters()})
+        return update(self, model)
+
+    monkeypatch.setattr(torch.optim.swa_utils.AveragedModel, "update_parameters", spy)
+    decay = 0.9
+    metrics = train(dataset, tmp_path / "avg", TrainConfig(**FAST, epochs=1, seed=4, average=decay))
+    expected = dict(iterates[0])
+    for w in iterates[1:]:
+        expected = {k: decay * expected[k] + (1 - decay) * w[k] for k in expected}
+    saved = weights_of(tmp_path / "avg")
+    assert len(iterates) > 1 and set(saved) == set(expected)
+    for name, value in expected.items():
+        torch.testing.assert_close(saved[name], value, rtol=1e-5, atol=1e-6)
+    assert not torch.equal(saved[next(iter(saved))], iterates[-1][next(iter(saved))])  # not the last iterate
+    model = load_model(tmp_path / "avg")  # and it is what the card's validation figures score
+    val = SplitData(dataset, "image_wise", "val")
+    from suctionbench.learning.train import evaluate
+
+    assert evaluate(model.network, val, model.stats, 0.2, torch.device("cpu"))["accuracy"] == metrics["val_accuracy"]
+
+
+def test_an_averaged_run_resumes_to_the_uninterrupted_weights(dataset, tmp_path):
+    config = TrainConfig(**FAST, epochs=2, seed=5, shuffle_shards=2, average=0.95)
+    train(dataset, tmp_path / "straight", config)
+    train(dataset, tmp_path / "resumed", TrainConfig(**FAST, epochs=1, seed=5, shuffle_shards=2, average=0.95))
+    train(dataset, tmp_path / "resumed", config)
+    for (name, a), b in zip(weights_of(tmp_path / "straight").items(), weights_of(tmp_path / "resumed").values(),
+                            strict=True):
+        assert torch.equal(a, b), name
+    with pytest.raises(InputError, match="average"):
+        TrainConfig(average=1.0)

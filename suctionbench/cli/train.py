@@ -60,6 +60,9 @@ def train_cmd(
                                              "soft (the robust label itself, as a probability).")] = "binary",
     init: Annotated[str | None, typer.Option(help="Fine-tune: start from this trained model's weights and input "
                                                   "normalisation (same --arch).")] = None,
+    average: Annotated[float | None, typer.Option(help="Score and save an exponential moving average of the weights "
+                                                       "with this decay per step (e.g. 0.9995); default: the last "
+                                                       "iterate.")] = None,
     overwrite: Annotated[bool, typer.Option(help="Discard a run already in --out instead of resuming it.")] = False,
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
@@ -78,7 +81,7 @@ def train_cmd(
         config = TrainConfig(arch=arch, epochs=epochs, device=device, split=split, batch_size=batch_size,
                              max_train_datapoints=max_datapoints, max_val_datapoints=max_val_datapoints,
                              augment=AUGMENT_GQCNN if augment else AUGMENT_OFF, target=target, seed=seed,
-                             init=init)
+                             init=init, average=average)
         # Every option spelled out, defaults included: the card's command reproduces the run even if defaults change.
         command = shlex.join([
             "suctionbench", "train", "--dataset", str(dataset), "--out", str(out), "--arch", arch, "--epochs",
@@ -87,6 +90,7 @@ def train_cmd(
             *(["--max-val-datapoints", str(max_val_datapoints)] if max_val_datapoints else []),
             "--augment" if augment else "--no-augment", "--target", target, "--seed", str(seed),
             *(["--init", init] if init else []),
+            *(["--average", str(average)] if average is not None else []),
         ])
         with _train_progress(not as_json) as update:
             metrics = train(dataset, out, config, progress=update, command=command, overwrite=overwrite)

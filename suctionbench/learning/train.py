@@ -182,6 +182,14 @@ class TrainConfig:
     threshold) or soft (cross-entropy against the metric itself as the probability of the positive
     class). Accuracy and AP are scored against the binary label either way."""
 
+    average: float | None = None
+    """Decay of an exponential moving average of the weights (Polyak averaging), updated after
+    every step; the averaged network is the one scored and saved (the raw one keeps training).
+    None: the last iterate, gqcnn's. Why: gqcnn's schedule is made for 25 epochs, and after 3 the
+    learning rate is still 0.0086 of 0.01, so the last iterate wanders: a 1.2 M-datapoint run's
+    held-out accuracy fell from 0.877 after its second epoch to 0.821 after its third while its
+    running training accuracy rose. 0.9995 averages over ~2,000 steps (128 k datapoints)."""
+
     init: str | None = None
     """A trained model directory to start from (fine-tuning: its weights and its input
     normalisation, so the network sees inputs scaled as it learnt them); its arch must be `arch`.
@@ -215,6 +223,8 @@ class TrainConfig:
             "fit_datapoints": (integer(self.fit_datapoints, 1), "an integer >= 1"),
             "label_threshold": (self.label_threshold is None or number(self.label_threshold), "None or a number"),
             "target": (self.target in TARGETS, f"one of {', '.join(TARGETS)}"),
+            "average": (self.average is None or (number(self.average) and 0 < self.average < 1),
+                        "None or a number in (0, 1)"),
         }
         for key, (ok, need) in checks.items():
             if not ok:
@@ -273,6 +283,7 @@ class _Session:
     shuffle_rng: np.random.Generator
     augment_gen: torch.Generator
     stats: NormStats
+    averaged: torch.optim.swa_utils.AveragedModel | None = None
     epoch: int = 0
     history: list[dict[str, Any]] = field(default_factory=list)
     train_seconds: float = 0.0
@@ -285,10 +296,18 @@ class _Session:
             "scheduler": self.scheduler.state_dict(), "shuffle_rng": self.shuffle_rng.bit_generator.state,
             "augment_rng": self.augment_gen.get_state(), "stats": self.stats.to_dict(), "history": self.history,
             "train_seconds": self.train_seconds, "images_trained": self.images_trained,
+            "averaged": None if self.averaged is None else self.averaged.state_dict(),
         }
+
+    @property
+    def scored(self) -> torch.nn.Module:
+        """The network that is evaluated and saved: the weights' average when there is one."""
+        return self.network if self.averaged is None else self.averaged.module
 
     def restore(self, state: dict[str, Any]) -> None:
         self.network.load_state_dict(state["model"])
+        if self.averaged is not None:
+            self.averaged.load_state_dict(state["averaged"])
         self.optimizer.load_state_dict(state["optimizer"])
         self.scheduler.load_state_dict(state["scheduler"])
         self.shuffle_rng.bit_generator.state = state["shuffle_rng"]
@@ -326,6 +345,8 @@ def _resume_key(config: TrainConfig, card: dict[str, Any], reader: DatasetReader
                 val_data: SplitData) -> dict[str, Any]:
     """What must match for a checkpoint to be resumed: the config (bar `RESUME_IGNORES`) and the data."""
     settings = {k: v for k, v in to_dict(config).items() if k not in RESUME_IGNORES}
+    if config.average is None:  # runs from before averaging existed resume as they were
+        del settings["average"]
     data = {"fingerprint": card.get("fingerprint"), "datapoints": reader.num_datapoints,
             "num_train": train_data.num_datapoints, "num_val": val_data.num_datapoints}
     return json_safe({"config": settings, "dataset": data})
@@ -420,6 +441,8 @@ def _train_epoch(session: _Session, data: SplitData, config: TrainConfig, thresh
         loss.backward()
         session.optimizer.step()
         session.scheduler.step()
+        if session.averaged is not None:
+            session.averaged.update_parameters(network)
         loss_sum += loss.detach() * len(batch)
         correct += (logits.detach().argmax(dim=1) == labels).sum()
         seen += len(batch)
@@ -547,9 +570,13 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
     optimizer = torch.optim.SGD(network.parameters(), lr=config.learning_rate, momentum=config.momentum,
                                 weight_decay=config.weight_decay)
     decay = _StaircaseDecay(config.batch_size, config.decay_epochs * train_data.num_datapoints, config.decay_rate)
+    averaged = None
+    if config.average is not None:
+        averaged = torch.optim.swa_utils.AveragedModel(
+            network, multi_avg_fn=torch.optim.swa_utils.get_ema_multi_avg_fn(config.average))
     session = _Session(network, optimizer, torch.optim.lr_scheduler.LambdaLR(optimizer, decay),
                        np.random.default_rng(seq_shuffle), torch.Generator().manual_seed(_torch_seed(seq_augment)),
-                       stats)
+                       stats, averaged)
     resumed_from = 0
     if saved is not None:
         session.restore(saved)
@@ -593,8 +620,8 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
         run_seconds += result["seconds"]
         session.train_seconds += result["seconds"]
         session.images_trained += result["images"]
-        evaluation = evaluate(network, val_data, stats, threshold, device, config.target)
-        fit = evaluate(network, fit_data, stats, threshold, device, config.target)
+        evaluation = evaluate(session.scored, val_data, stats, threshold, device, config.target)
+        fit = evaluate(session.scored, fit_data, stats, threshold, device, config.target)
         session.epoch = epoch
         session.history.append(json_safe({
             "epoch": epoch, "lr": lr, "train_loss": result["loss"], "train_accuracy": result["accuracy"],
@@ -605,7 +632,7 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
         _checkpoint(out_dir, session, config, resume_key, base_card, evaluation, device)
 
     if evaluation is None and not (out_dir / CARD_NAME).is_file():  # resumed a finished run whose files are gone
-        evaluation = evaluate(network, val_data, stats, threshold, device, config.target)
+        evaluation = evaluate(session.scored, val_data, stats, threshold, device, config.target)
         _checkpoint(out_dir, session, config, resume_key, base_card, evaluation, device)
     if evaluation is not None:
         _plot_pr_curve(out_dir / PR_CURVE_NAME, evaluation, f"{config.arch}, {config.split} validation, "
@@ -641,7 +668,7 @@ def _checkpoint(out_dir: Path, session: _Session, config: TrainConfig, resume_ke
     card["metrics"] = {key: last[key] for key in ("train_loss", "train_accuracy", "val_loss", "val_accuracy", "val_ap")}
     card["metrics"]["val_positive_rate"] = evaluation["positive_rate"]
     card["history"] = session.history
-    save_model(out_dir, GQCNNModel(session.network, session.stats, card, device=str(device)))
+    save_model(out_dir, GQCNNModel(session.scored, session.stats, card, device=str(device)))
     save_train_state(out_dir, session.state(config, resume_key))
 
 

@@ -75,6 +75,8 @@ OPTION_RULES: dict[str, Rule] = {
     "count": COUNT, "scenes": COUNT, "attempts": Rule(1, 1000, meaning="attempts timed per bin size"),
     "episodes": COUNT, "memory_grasps": COUNT, "reference_grasps": Rule(0, COUNT_MAX),
     "top": Rule(0, COUNT_MAX, meaning="rows of the table; 0 = none"),
+    "proposals_per_image": COUNT,
+    "average": Rule(0.0, 1.0, low_open=True, meaning="the moving average's decay per step, below 1"),
     # physical quantities and thresholds
     "mass": Rule(0.0, 1000.0, low_open=True, meaning="kg"),
     "threshold": Rule(0.0, 1.0, meaning="a robust wrench resistance"),

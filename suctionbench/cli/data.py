@@ -71,8 +71,6 @@ def generate(
         label = label_config(cup_preset(cup), load)
         if proposals is not None and scene != "table":
             raise InputError(f"--proposals with --scene {scene}: on-policy grasps are proposed on table scenes only")
-        if proposals_per_image < 1:
-            raise InputError(f"--proposals-per-image {proposals_per_image}: must be at least 1")
         output_dir(out, "--out")
         require_disk(out, datapoints * BYTES_PER_DATAPOINT, f"--datapoints {datapoints}")
         require_memory(label_memory(grasps_per_object, label.perturbation.num_samples)

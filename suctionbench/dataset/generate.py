@@ -216,25 +216,26 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
     camera_config = CameraPoseConfig().for_camera(intrinsics)
     out: dict[str, list[np.ndarray]] = {name: [] for name in UNIT_FIELDS}
 
-    def record_grasps(noisy: np.ndarray, depth: np.ndarray, camera_pose: np.ndarray, image: int, s: int,
-                      p_world: np.ndarray, v_world: np.ndarray, v_cam: np.ndarray, pixels: np.ndarray,
-                      depths: np.ndarray, angles: np.ndarray, lab: Any, rows: Any, ids: np.ndarray) -> None:
-        """Append the datapoints of grasps seen on one image: rows `rows` of the labels `lab`,
-        candidate ids `ids`."""
+    def record_grasps(noisy: np.ndarray, depth: np.ndarray, mask: np.ndarray, camera_pose: np.ndarray, image: int,
+                      s: int, p_world: np.ndarray, v_world: np.ndarray, v_cam: np.ndarray, pixels: np.ndarray,
+                      depths: np.ndarray, angles: np.ndarray, lab: Any, ids: np.ndarray) -> None:
+        """Append the datapoints of grasps seen on one image (`mask`: the object's pixels): their
+        labels `lab` (rwr, seal flags, wr; one row per grasp) and candidate ids `ids`."""
+        rwr, seal, wr = lab
         out["depth_ims_tf_table"].append(extract_thumbnails(noisy, pixels, angles)[..., None].astype(np.float32))
         context = extract_context_thumbnails(noisy, pixels, angles)
         out["context_ims_tf_table"].append(context[..., None].astype(np.float32))
         out["object_context"].append(image_object_context(intrinsics, depth, noisy, camera_pose, pixels, p_world,
-                                                          v_world))
+                                                          v_world, object_mask=mask))
         out["hand_poses"].append(np.column_stack([pixels[:, 1], pixels[:, 0], pose_vector(depths, v_world), v_cam])
                                  .astype(np.float32))
-        out["robust_suction_wrench_resistance"].append(lab.rwr[rows].astype(np.float32))
+        out["robust_suction_wrench_resistance"].append(rwr.astype(np.float32))
         out["object_labels"].append(np.full(len(ids), unit.index, np.int32))
         out["pose_labels"].append(np.full(len(ids), s, np.int32))
         out["image_labels"].append(np.full(len(ids), unit.index * MAX_IMAGES_PER_UNIT + image, np.int32))
         out["grasp_labels"].append(ids.astype(np.int32))
-        out["seal_flags"].append(lab.seal.seal[rows].astype(np.uint8))
-        out["wrench_resistance"].append(lab.wr[rows].astype(np.uint8))
+        out["seal_flags"].append(seal.astype(np.uint8))
+        out["wrench_resistance"].append(wr.astype(np.uint8))
 
     count = 0
     with TableScene(record, intrinsics) as scene:
@@ -252,8 +253,8 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
             depth = scene.render(object_pose, camera_pose)
             noisy = apply_depth_noise(depth, rng, config.noise)
             rot, origin = camera_pose[:3, :3], camera_pose[:3, 3]
+            mask = rendered_object(intrinsics, depth, camera_pose)
             if proposer is not None:  # the policy's own best grasps first (module dataset.proposals)
-                mask = (intrinsics.deproject(depth) @ rot[2] + origin[2]) > OBJECT_CLEARANCE  # the render's object
                 q_cam, a_cam = proposer.propose(noisy, mask, intrinsics, camera_pose,
                                                 np.random.default_rng((config.seed, unit.index, image, 1)))
                 q_world, a_world = q_cam @ rot.T + origin, a_cam @ rot.T
@@ -265,8 +266,8 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
                     seed = int(np.random.SeedSequence((config.seed, unit.index, image, 2)).generate_state(1)[0])
                     lab = labeller_in_pose(s).label((q_world - shift) @ turn, a_world @ turn, seed,
                                                     metrics=("wr", "rwr"))
-                    record_grasps(noisy, depth, camera_pose, image, s, q_world, a_world, a_cam, at, depths, angles,
-                                  lab, slice(None), -1 - np.arange(len(steep)))
+                    record_grasps(noisy, depth, mask, camera_pose, image, s, q_world, a_world, a_cam, at, depths,
+                                  angles, (lab.rwr, lab.seal.seal, lab.wr), -1 - np.arange(len(steep)))
                     count += len(steep)
             p_world = points @ object_pose[:3, :3].T + object_pose[:3, 3]
             v_world = approaches @ object_pose[:3, :3].T
@@ -276,8 +277,9 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
             idx = np.flatnonzero(keep)[: unit.quota - count]
             if len(idx) == 0:
                 continue
-            record_grasps(noisy, depth, camera_pose, image, s, p_world[idx], v_world[idx], v_cam[idx], pixels[idx],
-                          depths[idx], angles[idx], labels_in_pose(s), idx, idx)
+            lab = labels_in_pose(s)
+            record_grasps(noisy, depth, mask, camera_pose, image, s, p_world[idx], v_world[idx], v_cam[idx],
+                          pixels[idx], depths[idx], angles[idx], (lab.rwr[idx], lab.seal.seal[idx], lab.wr[idx]), idx)
             count += len(idx)
     return {name: np.concatenate(parts) if parts else _empty(name) for name, parts in out.items()}
 
@@ -300,13 +302,20 @@ def image_object_context(intrinsics: CameraIntrinsics, depth: np.ndarray, noisy:
 
     rot, origin = camera_pose[:3, :3], camera_pose[:3, 3]
     if object_mask is None:
-        object_mask = (intrinsics.deproject(depth) @ rot[2] + origin[2]) > OBJECT_CLEARANCE
+        object_mask = rendered_object(intrinsics, depth, camera_pose)
     mask = (noisy > 0) & object_mask
     cloud = intrinsics.deproject(noisy)  # camera frame: only the object's and the grasps' pixels are moved
     cols = np.clip(np.rint(pixels[:, 0]).astype(np.intp), 0, noisy.shape[1] - 1)
     rows = np.clip(np.rint(pixels[:, 1]).astype(np.intp), 0, noisy.shape[0] - 1)
     grasps = np.where((noisy[rows, cols] > 0)[:, None], cloud[rows, cols] @ rot.T + origin, exact_points)
     return object_context(cloud[mask] @ rot.T + origin, grasps, approaches)
+
+
+def rendered_object(intrinsics: CameraIntrinsics, depth: np.ndarray, camera_pose: np.ndarray) -> np.ndarray:
+    """The object's pixels (H, W) bool in a clean table render: its points more than
+    `OBJECT_CLEARANCE` above the table (z = 0), as the simulator's segmentation gives them."""
+    rot, origin = camera_pose[:3, :3], camera_pose[:3, 3]
+    return (intrinsics.deproject(depth) @ rot[2] + origin[2]) > OBJECT_CLEARANCE
 
 
 def _empty(name: str) -> np.ndarray:

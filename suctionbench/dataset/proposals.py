@@ -21,7 +21,6 @@ the object's frame with the same labeller as the uniform grasps.
 from __future__ import annotations
 
 import functools
-import json
 from pathlib import Path
 from typing import Any
 
@@ -36,12 +35,15 @@ PROPOSAL_SPACING = 0.01
 def model_fingerprint(model_dir: str | Path) -> str:
     """The proposing model's weights checksum (its model card's `weights_sha256`): what the
     dataset's configuration fingerprint records, so a resumed run with other weights is refused."""
-    card = Path(model_dir) / "model.json"
+    from suctionbench.learning.checkpoint import read_model_card
+
     try:
-        return str(json.loads(card.read_text())["weights_sha256"])
-    except (OSError, ValueError, KeyError) as exc:
-        raise InputError(f"--proposals '{model_dir}': not a trained model directory ({type(exc).__name__}: "
-                         f"{card} unreadable or without weights_sha256)") from None
+        card = read_model_card(model_dir)
+    except InputError as exc:
+        raise InputError(f"--proposals '{model_dir}': not a trained model ({exc})") from None
+    if not isinstance(card.get("weights_sha256"), str):
+        raise InputError(f"--proposals '{model_dir}': not a trained model (its card has no weights_sha256)")
+    return card["weights_sha256"]
 
 
 def spaced_top(q: np.ndarray, points: np.ndarray, count: int, spacing: float) -> np.ndarray:
@@ -63,7 +65,7 @@ class Proposer:
     def __init__(self, model_dir: str, per_image: int, spacing: float = PROPOSAL_SPACING) -> None:
         from suctionbench.policies.fc_gqcnn import make_fc_gqcnn_policy
 
-        self.policy = make_fc_gqcnn_policy(model_dir)
+        self.policy = make_fc_gqcnn_policy(model_dir, refine=0)  # only the dense q is read: no exact re-scoring
         self.per_image, self.spacing = per_image, spacing
 
     def propose(self, depth: np.ndarray, mask: np.ndarray, intrinsics: Any, camera_pose: np.ndarray,

@@ -489,10 +489,10 @@ def corpus_spec(seed: int, index: int, masses: str = "material", sizes: str = "f
         largest = _log_uniform(size_rng, *ITEM_SIZES) if rescale else None
         try:
             mesh = make_shape(gen, params)
-            if largest is not None:
+            if largest is not None:  # what the "scaled" generator builds, from the mesh at hand
                 gen, params = "scaled", plain({"generator": gen, "params": params,
                                               "factor": largest / float(mesh.extents.max())})
-                mesh = make_shape(gen, params)
+                mesh.apply_scale(params["factor"])
             problem = check_shape(mesh)
         except Exception as exc:  # any generator error (bad parameter combination) means: redraw
             problem = f"{type(exc).__name__}: {exc}"

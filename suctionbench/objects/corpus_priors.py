@@ -40,7 +40,7 @@ def check_size_mode(sizes: str) -> None:
 @generator("scaled")
 def scaled(generator: str, params: dict[str, Any], factor: float) -> trimesh.Trimesh:
     """Another generator's shape scaled uniformly by `factor` (the corpus' size prior)."""
-    mesh = make_shape(generator, params).copy()
+    mesh = make_shape(generator, params)  # a new mesh every call
     mesh.apply_scale(factor)
     return mesh
 

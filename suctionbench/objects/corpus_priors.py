@@ -23,8 +23,9 @@ ITEM_SIZES = (0.04, 0.245)
 """Largest extent (m) of a generic corpus shape under `--sizes items`, drawn log-uniformly: the
 span of the household goods a 15 mm cup picks, from a matchbox or a D cell (4-6 cm) to a cereal
 box or a shoe box (22-25 cm; the upper end stays inside SIZE_RANGE after rounding). The families'
-own ranges ("family") centre on 8-9 cm (blobs 5.6 cm): half the corpus is smaller than a tin of
-tuna, while real items, such as the evaluation sets' (4-25 cm, median 12-13 cm), are larger."""
+own ranges ("family") centre on 8-9 cm (blobs 5.6 cm): half the corpus' largest extents lie below
+9.0 cm (a tin of tuna's is 8.6 cm), while real items, such as the evaluation sets' (4-25 cm, median
+12-13 cm), are larger."""
 
 SIZE_MODES = ("family", "items")
 """`objects generate --sizes`: each family's own size range (the shipped corpus), or the generic

@@ -211,9 +211,9 @@ def case_scale_1mm(tmp_path: Path, box: Path):
     return _batch(tiny, tmp_path), [str(tiny), "absurd scale"]
 
 
-def case_millimetre_file_without_units(tmp_path: Path, box: Path):
-    mm = write_box(tmp_path / "box_mm.stl", (40.0, 40.0, 40.0))
-    return _batch(mm, tmp_path), [str(mm), "absurd scale"]
+def case_millimetre_obj_without_units(tmp_path: Path, box: Path):
+    mm = write_box(tmp_path / "box_mm.obj", (40.0, 40.0, 40.0))  # an OBJ's units are never guessed
+    return _batch(mm, tmp_path), [str(mm), "absurd scale", "fits read in cm or mm"]
 
 
 def case_zero_approach(tmp_path: Path, box: Path):
@@ -294,7 +294,7 @@ BAD_INPUTS = [
     pytest.param(case_flat_mesh, id="flat-mesh"),
     pytest.param(case_scale_2m, id="scale-2m"),
     pytest.param(case_scale_1mm, id="scale-1mm"),
-    pytest.param(case_millimetre_file_without_units, id="mm-file-no-units"),
+    pytest.param(case_millimetre_obj_without_units, id="mm-file-no-units"),
     pytest.param(case_zero_approach, id="zero-approach"),
     pytest.param(case_non_unit_approach, id="non-unit-approach"),
     pytest.param(case_wrong_count, id="grasp-5-numbers"),
@@ -381,6 +381,14 @@ def test_millimetre_file_with_units_mm_is_ok(tmp_path: Path) -> None:
     payload = last_json(result)
     assert payload["ok"] is True and payload["seal"] is True
     assert payload["contact_point"][2] == pytest.approx(0.02, abs=1e-6)  # metres, not mm
+
+
+def test_millimetre_stl_without_units_is_read_in_millimetres(tmp_path: Path) -> None:
+    # 40 units is no plausible size in metres and a plausible one in millimetres (AUTO_UNITS)
+    mm = write_box(tmp_path / "box_mm.stl", (40.0, 40.0, 40.0))
+    result = invoke("label", mm, "--grasp", TOP_GRASP, "--mass", MASS, "--json")
+    assert result.exit_code == 0, stderr_of(result)
+    assert last_json(result)["contact_point"][2] == pytest.approx(0.02, abs=1e-6)
 
 
 # ----------------------------------------------------------------------------------------------

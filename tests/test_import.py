@@ -172,7 +172,11 @@ def build_corpus(directory: Path) -> list[Case]:
     save("self_intersecting.stl", _tube(curl, 0.008), error="self-intersecting")
     apart = trimesh.util.concatenate([_box((0.03,) * 3), _box((0.03,) * 3, (0.1, 0, 0))])
     save("two_apart.stl", apart, error="2 disconnected bodies")
-    save("big_in_mm.stl", _box((60.0, 40.0, 20.0)), error=r"absurd scale.*units")
+    # Without --units an STL is read in metres or millimetres, whichever size is plausible (no size
+    # is plausible both ways); an OBJ has no convention, so a size plausible only in other units is
+    # rejected with the units that would fit (60 units: 60 cm or 60 mm, 1.5 m in inches).
+    save("part_mm_auto.stl", _box((60.0, 40.0, 20.0)), volume=0.06 * 0.04 * 0.02)
+    save("big_in_mm.obj", _box((60.0, 40.0, 20.0)), error=r"absurd scale.*it fits read in cm or mm.*--units")
     rng = np.random.default_rng(5)
     text("garbage.stl", rng.bytes(3000), error=r"not a readable mesh \(format stl")
     text("garbage.obj", b"\xff\xfe" + rng.bytes(2000), error=r"not a readable mesh \(format obj")
@@ -264,7 +268,7 @@ def test_corpus_mesh_imports_or_names_its_defect(corpus, name, tmp_path):
 
 def test_each_defect_class_has_its_own_message(corpus, tmp_path):
     messages = {}
-    for name in ("hemisphere.stl", "self_intersecting.stl", "two_apart.stl", "garbage.stl", "big_in_mm.stl"):
+    for name in ("hemisphere.stl", "self_intersecting.stl", "two_apart.stl", "garbage.stl", "big_in_mm.obj"):
         messages[name] = check_case(corpus[name], tmp_path / "objs").split("': ", 1)[1]
     firsts = [m.split(" ")[0:2] for m in messages.values()]
     assert len({tuple(f) for f in firsts}) == len(firsts), messages
@@ -274,6 +278,8 @@ def test_repairs_are_recorded_and_can_be_refused(corpus, tmp_path):
     record = import_case(corpus["touching_table.stl"], tmp_path / "objs")
     assert record.params["repairs"] == ["5 pieces that touch face to face united into one body"]
     assert record.params["units"] == "m" and record.params["scale"] == 1.0
+    millimetres = import_case(corpus["part_mm_auto.stl"], tmp_path / "objs")
+    assert millimetres.units == "mm" and millimetres.params["units"] == "mm" and millimetres.scale == 0.001
     case = corpus["duplicated_faces.stl"]
     with pytest.raises(InputError, match=r"needs repair \(40 duplicated faces removed\).*--no-repair"):
         import_mesh(case.path, set_name="corpus", name="strict", root=tmp_path / "objs", try_repair=False)

@@ -126,6 +126,8 @@ def console() -> Console:
 
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object on the last stdout line.")]
 SeedOpt = Annotated[int, typer.Option("--seed", help="Seed of every random draw.")]
+UnitsOpt = Annotated[str, typer.Option(help="Units of the mesh file: m, cm, mm, in, or auto (an STL in metres or "
+                                            "millimetres, whichever size is plausible; other formats in metres).")]
 
 def emit(result: dict[str, Any], as_json: bool) -> None:
     """Under --json, print `result` as one strict JSON line (NaN and infinities become null)."""

@@ -12,7 +12,17 @@ import typer
 from rich.table import Table
 from rich.text import Text
 
-from suctionbench.cli.common import JsonOpt, SeedOpt, app, console, err, parse_vector, progress_bar, run_command
+from suctionbench.cli.common import (
+    JsonOpt,
+    SeedOpt,
+    UnitsOpt,
+    app,
+    console,
+    err,
+    parse_vector,
+    progress_bar,
+    run_command,
+)
 from suctionbench.errors import InputError
 from suctionbench.validate import (
     BYTES_PER_LABEL,
@@ -34,7 +44,7 @@ def label(
     grasps: Annotated[int | None, typer.Option(help="Sample N grasp candidates on the surface.")] = None,
     mass: Annotated[float, typer.Option(help="Object mass in kg (the paper assumes 1.0 when unknown).")] = 1.0,
     com: Annotated[str | None, typer.Option(help="Centre of mass 'x,y,z' (default: from the mesh).")] = None,
-    units: Annotated[str, typer.Option(help="Units of the mesh file: m, cm or mm.")] = "m",
+    units: UnitsOpt = "auto",
     cup: Annotated[str, typer.Option(help="Cup preset: default or paper.")] = "default",
     samples: Annotated[int, typer.Option(help="Monte-Carlo samples J per grasp.")] = 50,
     out: Annotated[Path | None, typer.Option(help="With --grasps: write labels to this .npz.")] = None,

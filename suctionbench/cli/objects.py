@@ -12,6 +12,7 @@ from rich.table import Table
 from suctionbench.cli.common import (
     JsonOpt,
     SeedOpt,
+    UnitsOpt,
     console,
     err,
     objects_app,
@@ -145,7 +146,7 @@ def objects_import(
     path: Annotated[str, typer.Argument(help="Mesh file: OBJ, STL, PLY, OFF, GLB, GLTF.")],
     set_name: Annotated[str, typer.Option("--set", help="User set to add it to.")] = "custom",
     name: Annotated[str, typer.Option(help="Object name (lower case, digits, _ and -).")] = "",
-    units: Annotated[str, typer.Option(help="Units of the file: m, cm, mm or in.")] = "m",
+    units: UnitsOpt = "auto",
     scale: Annotated[float, typer.Option(help="Extra scale factor on top of --units (e.g. a URDF mesh scale).")] = 1.0,
     mass: Annotated[float | None, typer.Option(help="Mass in kg, at most the mass cap (default: a PLA print).")] = None,
     repair: Annotated[
@@ -178,7 +179,11 @@ def objects_import(
             print_rows("imported", [row])
             for note in repairs:
                 err.print(f"repaired: {note}", highlight=False)
-        return {**row, "directory": str(record.directory), "scale": record.scale, "repairs": repairs}
+        if units.lower() == "auto" and record.units != "m" and not as_json:
+            err.print(f"read in {record.units}: its size is plausible only in {record.units} (--units auto)",
+                      highlight=False)
+        return {**row, "directory": str(record.directory), "units": record.units, "scale": record.scale,
+                "repairs": repairs}
 
     run_command(as_json, body, output=f"--root '{root}'" if root is not None else "the user object root")
 

@@ -22,6 +22,15 @@ SUPPORTED_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf")
 UNIT_SCALES = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
 """Metres per unit for the `units` argument."""
 
+AUTO_UNITS = {".stl": ("m", "mm")}
+"""The readings ``units="auto"`` (the default) tries in turn, per format; the first whose size is
+plausible wins. An STL file carries no units, and two conventions write them: robotics packages
+(ROS, URDF) metres, CAD and 3D printing millimetres. No size is plausible in both (5 mm - 1 m read
+as metres is 0.005-1 unit, read as millimetres 5-1000 units), so the choice is never ambiguous.
+Every other format is read as metres: glTF by its specification; OBJ, PLY and OFF have no
+convention (Blender writes metres, Maya centimetres, 3ds Max inches), so a wrong size there is
+rejected with the units it would fit, never guessed."""
+
 MIN_EXTENT = 0.005
 """Smallest plausible object size (m): below this the units are almost certainly wrong."""
 
@@ -45,12 +54,38 @@ class MeshInfo:
     warnings: list[str] = field(default_factory=list)
     """Non-fatal problems, one line each, naming the mesh."""
 
+    units: str = "m"
+    """The units the file was read in (``load_mesh`` resolves "auto" to one of `UNIT_SCALES`)."""
+
     @property
     def center_mass(self) -> np.ndarray:
         """Centre of mass for uniform density; the area-weighted centroid if not watertight."""
         if self.watertight:
             return np.asarray(self.mesh.center_mass, dtype=float)
         return np.asarray(self.mesh.centroid, dtype=float)
+
+
+def resolve_units(path: str | Path, units: str, largest: float, scale: float = 1.0) -> str:
+    """The units a file of `largest` extent (file units, times `scale`) is read in: `units` itself
+    unless it is "auto" (see `AUTO_UNITS`); InputError naming the units that would fit where the
+    size is implausible as read."""
+    units = units.lower()
+    if units != "auto":
+        mesh_scale(units, scale)  # validates units and scale
+        candidates: tuple[str, ...] = (units,)
+    else:
+        mesh_scale("m", scale)
+        candidates = AUTO_UNITS.get(Path(path).suffix.lower(), ("m",))
+    for candidate in candidates:
+        if MIN_EXTENT <= largest * scale * UNIT_SCALES[candidate] <= MAX_EXTENT:
+            return candidate
+    read = ", ".join(f"{largest * scale:.4g} {u} read in {u}" for u in candidates)
+    fits = [u for u in UNIT_SCALES if MIN_EXTENT <= largest * scale * UNIT_SCALES[u] <= MAX_EXTENT]
+    hint = f"it fits read in {' or '.join(fits)}" if fits else "no unit (m, cm, mm, in) fits it"
+    raise InputError(
+        f"mesh '{path}': absurd scale (largest extent {read}; expected {MIN_EXTENT:g}-{MAX_EXTENT:g} m; "
+        f"{hint}); pass the file's units (--units) or a scale factor (--scale)"
+    )
 
 
 def mesh_scale(units: str = "m", scale: float = 1.0) -> float:
@@ -97,16 +132,22 @@ def read_mesh(path: str | Path) -> trimesh.Trimesh:
     return loaded
 
 
-def load_mesh(path: str | Path, units: str = "m", scale: float = 1.0) -> MeshInfo:
-    """Read a mesh file, convert it to metres (`units` times `scale`) and validate it (see `validate_mesh`)."""
-    factor = mesh_scale(units, scale)
+def load_mesh(path: str | Path, units: str = "auto", scale: float = 1.0) -> MeshInfo:
+    """Read a mesh file, convert it to metres (`units` times `scale`; "auto": see `AUTO_UNITS`) and
+    validate it (see `validate_mesh`). The units it was read in are the result's `units`."""
+    mesh_scale(units if units.lower() != "auto" else "m", scale)
     loaded = read_mesh(path)
     if not np.all(np.isfinite(loaded.vertices)):
         raise InputError(f"mesh '{path}': vertices contain NaN or infinite coordinates")
     loaded.process(validate=False)
+    used = np.asarray(loaded.vertices)[np.unique(loaded.faces)]  # a stray vertex is no part of the size
+    units = resolve_units(path, units, float(np.ptp(used, axis=0).max()), scale)
+    factor = mesh_scale(units, scale)
     if factor != 1.0:
         loaded.apply_scale(factor)
-    return validate_mesh(loaded, source=str(path))
+    info = validate_mesh(loaded, source=str(path))
+    info.units = units
+    return info
 
 
 def validate_mesh(mesh: trimesh.Trimesh, source: str = "mesh") -> MeshInfo:

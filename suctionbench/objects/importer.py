@@ -40,7 +40,7 @@ def import_mesh(
     *,
     set_name: str,
     name: str,
-    units: str = "m",
+    units: str = "auto",
     scale: float = 1.0,
     mass: float | None = None,
     try_repair: bool = True,
@@ -49,7 +49,8 @@ def import_mesh(
 ) -> ObjectRecord:
     """Import a mesh file into SET/NAME under the user object root (or `root`).
 
-    The file is read as written, scaled to metres (`units` times `scale`), validated, made one
+    The file is read as written, scaled to metres (`units` times `scale`; "auto" reads an STL in
+    metres or millimetres, whichever size is plausible: `geometry.mesh.AUTO_UNITS`), validated, made one
     closed solid (`suctionbench.objects.repair.solidify`: seams merged, duplicated faces removed,
     touching or overlapping pieces united, small holes closed, stray open sheets dropped), then
     built (mass, stable poses, convex parts). What was repaired is kept in the record's
@@ -61,6 +62,7 @@ def import_mesh(
     solid = solidify(info.mesh, source=str(path))
     if solid.notes and not try_repair:
         raise InputError(f"mesh '{path}': needs repair ({solid.notes[0]}) and repairs are off (--no-repair)")
+    units = info.units
     params = {"units": units, "scale": float(scale), "repairs": solid.notes}
     spec = ObjectSpec(name=name, set=set_name, generator="import", params=params, description=f"imported from {path}")
     return build_object(

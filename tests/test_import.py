@@ -7,6 +7,7 @@ its defect class."""
 from __future__ import annotations
 
 import json
+import os
 import re
 import sys
 import tempfile
@@ -357,6 +358,28 @@ def test_coacd_crash_is_a_clean_input_error_with_nothing_left(corpus, tmp_path, 
     assert record.decomposition["method"] == "hull" and len(record.parts) == 1
     assert "SIGABRT" in record.decomposition["failures"][0]
     assert [p.name for p in (root / "corpus").iterdir()] == ["seams_box"]
+
+
+def test_coacd_tries_side_by_side_give_the_same_parts_and_leave_nothing(corpus, tmp_path, monkeypatch):
+    """The schedule's tries run at once (`parallel`) and are judged in order: the same parts and
+    record as one by one (every run is seeded), no temp folder and no child process left behind."""
+    from suctionbench.objects.build import decompose_mesh
+    from suctionbench.objects.decompose import IMPORT_OPTIONS
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    (tmp_path / "tmp").mkdir()
+    piece_a, piece_b = _box((0.06, 0.02, 0.02)), _box((0.02, 0.02, 0.04), (0.02, 0.0, 0.03))
+    solid = trimesh.boolean.union([piece_a, piece_b], engine="manifold")  # an L bracket
+    # a first try that cannot fit (one hull on an L), so the second, already running, is judged too
+    schedule = ((1.0, 1), (0.05, 8), (0.03, 16))
+    one, info_one = decompose_mesh(solid, schedule=schedule, options=IMPORT_OPTIONS, parallel=1)
+    three, info_three = decompose_mesh(solid, schedule=schedule, options=IMPORT_OPTIONS, parallel=3)
+    assert info_one == info_three and info_one["threshold"] == 0.05
+    assert len(one) == len(three) and all(np.array_equal(a.vertices, b.vertices) for a, b in zip(one, three))
+    assert list((tmp_path / "tmp").iterdir()) == []
+    children = Path(f"/proc/{os.getpid()}/task/{os.getpid()}/children")
+    if children.exists():
+        assert children.read_text().split() == []
 
 
 def test_cli_import_crash_exits_2_with_a_json_line(corpus, tmp_path):

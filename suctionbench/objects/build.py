@@ -15,6 +15,7 @@ import hashlib
 import os
 import shutil
 import tomllib
+from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -27,7 +28,7 @@ from suctionbench.config import CUP_DEFAULT
 from suctionbench.errors import InputError
 from suctionbench.geometry.mesh import mesh_scale, validate_mesh
 from suctionbench.io import WRITE_ERRNOS, os_error_reason, publish_dir, staging_dir
-from suctionbench.objects.decompose import CoacdFailed, run_coacd
+from suctionbench.objects.decompose import CoacdFailed, CoacdRun, run_coacd
 from suctionbench.objects.mass import MassModel, MassProperties, mass_properties, over_cap_message, resolve_mass
 from suctionbench.objects.ownership import check_replaceable_objects
 from suctionbench.objects.spec import ObjectSpec
@@ -171,30 +172,51 @@ def convex_parts(
 ) -> list[trimesh.Trimesh]:
     """Convex decomposition with CoACD (MuJoCo collides meshes by their convex hulls), run in a child
     process (suctionbench.objects.decompose) so that a native crash raises CoacdFailed here."""
-    raw = run_coacd(np.asarray(mesh.vertices), np.asarray(mesh.faces), threshold, max_hulls, seed, options)
+    return _hulls(run_coacd(np.asarray(mesh.vertices), np.asarray(mesh.faces), threshold, max_hulls, seed, options))
+
+
+def _hulls(raw: list[tuple[np.ndarray, np.ndarray]]) -> list[trimesh.Trimesh]:
+    """CoACD's parts as convex hulls in a fixed order (by centroid)."""
     parts = [trimesh.Trimesh(v, f, process=True).convex_hull for v, f in raw]
     return sorted(parts, key=lambda p: tuple(np.round(p.centroid, 6)))
 
 
 def decompose_mesh(
-    mesh: trimesh.Trimesh, source: str = "mesh", schedule=COACD_SCHEDULE, options: dict | None = None
+    mesh: trimesh.Trimesh, source: str = "mesh", schedule=COACD_SCHEDULE, options: dict | None = None,
+    parallel: int = 1,
 ) -> tuple[list[trimesh.Trimesh], dict[str, Any]]:
     """Convex parts following `schedule`, and how well they fit (the last try if none fits); `options`
     are further CoACD keywords (imports use decompose.IMPORT_SCHEDULE and IMPORT_OPTIONS).
 
+    The tries are judged in the schedule's order, the first that fits wins; with `parallel` > 1 the
+    next tries already run beside the one being waited for (up to `parallel` CoACD children at
+    once) and those not needed are stopped: the same parts (each run is seeded), sooner when the
+    first tries do not fit, for a user waiting on an import with idle cores.
+
     A CoACD run that crashes moves on to the next threshold; if every run crashes, a convex object
     (hull within EXCESS_MAX of its volume) falls back to its hull, anything else is an InputError."""
     best, failures = None, []
-    for threshold, max_hulls in schedule:
-        try:
-            parts = convex_parts(mesh, threshold, max_hulls, options=options)
-        except CoacdFailed as exc:
-            failures.append(f"threshold {threshold:g}: {exc}")
-            continue
-        quality = decomposition_quality(mesh, parts)
-        best = parts, {"method": "coacd", "threshold": threshold, "max_convex_hull": max_hulls, **quality}
-        if quality["excess"] <= EXCESS_MAX and quality["coverage"] >= COVERAGE_MIN:
-            break
+    vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    pending = list(schedule)
+    running: deque[tuple[float, int, CoacdRun]] = deque()
+    try:
+        while pending or running:
+            while pending and len(running) < max(1, parallel):
+                threshold, max_hulls = pending.pop(0)
+                running.append((threshold, max_hulls, CoacdRun(vertices, faces, threshold, max_hulls, options=options)))
+            threshold, max_hulls, run = running.popleft()
+            try:
+                parts = _hulls(run.parts())
+            except CoacdFailed as exc:
+                failures.append(f"threshold {threshold:g}: {exc}")
+                continue
+            quality = decomposition_quality(mesh, parts)
+            best = parts, {"method": "coacd", "threshold": threshold, "max_convex_hull": max_hulls, **quality}
+            if quality["excess"] <= EXCESS_MAX and quality["coverage"] >= COVERAGE_MIN:
+                break
+    finally:
+        for *_, run in running:
+            run.cancel()
     if best is not None:
         return best
     hull = mesh.convex_hull
@@ -226,6 +248,7 @@ def build_object(
     mass: float | None = None,
     decompose: bool = True,
     coacd: tuple[tuple[tuple[float, int], ...], dict] | None = None,
+    coacd_parallel: int = 1,
     reuse_parts: bool = False,
 ) -> ObjectRecord:
     """Build an object directory at `out_dir` (replaced atomically) and return its record.
@@ -237,7 +260,8 @@ def build_object(
     parent folders it created.
 
     `coacd`: (schedule, options) for the convex decomposition instead of COACD_SCHEDULE and CoACD's
-    defaults (see `decompose_mesh`). `reuse_parts`: where `out_dir` already holds this very mesh (same
+    defaults (see `decompose_mesh`); `coacd_parallel`: how many of its tries may run at once.
+    `reuse_parts`: where `out_dir` already holds this very mesh (same
     geometry hash) with its convex parts, keep those parts instead of running CoACD again (a rebuild
     that changes only masses; CoACD is deterministic, so a full rebuild gives the same parts)."""
     out_dir = Path(out_dir)
@@ -274,7 +298,7 @@ def build_object(
         part_bytes, record.decomposition = kept
     elif decompose:  # before any folder exists: a failure leaves nothing behind
         schedule, options = coacd or (COACD_SCHEDULE, None)
-        parts, record.decomposition = decompose_mesh(mesh, source, schedule, options)
+        parts, record.decomposition = decompose_mesh(mesh, source, schedule, options, parallel=coacd_parallel)
         part_bytes = [part.export(file_type="stl") for part in parts]
     files = {"mesh.stl": mesh.export(file_type="stl")}
     if decompose:

@@ -21,6 +21,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -59,6 +60,67 @@ def _child_command(job: Path, result: Path) -> list[str]:
     return [sys.executable, str(Path(__file__).resolve()), str(job), str(result)]
 
 
+class CoacdRun:
+    """One CoACD run in its child process, started when the object is made; `parts()` waits for its
+    result, `cancel()` stops it. Several may run at once (`build.decompose_mesh` starts the next
+    tries of its schedule beside the first). The private temp folder is removed however it ends."""
+
+    def __init__(
+        self,
+        vertices: np.ndarray,
+        faces: np.ndarray,
+        threshold: float,
+        max_hulls: int,
+        seed: int = 0,
+        options: dict | None = None,
+    ) -> None:
+        self._folder = tempfile.TemporaryDirectory(prefix="suctionbench-coacd-")
+        folder = Path(self._folder.name)
+        self._job, self._result, self._stderr = folder / "job.npz", folder / "parts.npz", folder / "stderr.txt"
+        try:
+            np.savez(
+                self._job,
+                vertices=np.ascontiguousarray(vertices, dtype=np.float64),
+                faces=np.ascontiguousarray(faces, dtype=np.int64),
+                threshold=float(threshold),
+                max_hulls=int(max_hulls),
+                seed=int(seed),
+                options=json.dumps({**COACD_OPTIONS, **(options or {})}),
+            )
+            env = {**os.environ, "PYTHONFAULTHANDLER": "0", PARENT_ENV: str(os.getpid())}
+            with open(self._stderr, "wb") as stderr:  # a file, not a pipe: runs side by side never block
+                self._process = subprocess.Popen(
+                    _child_command(self._job, self._result), stdout=subprocess.DEVNULL, stderr=stderr, env=env
+                )
+        except BaseException:
+            self._folder.cleanup()
+            raise
+        self._deadline = time.monotonic() + COACD_TIMEOUT
+
+    def parts(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """(vertices, faces) of each convex part, once the child has finished; CoacdFailed if it
+        crashed, failed or ran past COACD_TIMEOUT (then it is stopped)."""
+        try:
+            try:
+                code = self._process.wait(timeout=max(0.0, self._deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                raise CoacdFailed(f"CoACD ran past {COACD_TIMEOUT:g} s and was stopped") from None
+            if code != 0 or not self._result.is_file():
+                raise CoacdFailed(_describe_exit(code, self._stderr.read_bytes()))
+            with np.load(self._result) as data:
+                count = int(data["count"])
+                return [(data[f"v{i}"], data[f"f{i}"]) for i in range(count)]
+        finally:
+            self.cancel()
+
+    def cancel(self) -> None:
+        """Stop the child if it still runs and remove the temp folder (idempotent)."""
+        if self._process.poll() is None:
+            self._process.kill()
+            self._process.wait()
+        self._folder.cleanup()
+
+
 def run_coacd(
     vertices: np.ndarray,
     faces: np.ndarray,
@@ -70,29 +132,7 @@ def run_coacd(
     """(vertices, faces) of each convex part CoACD finds, computed in a child process.
 
     `options` are further coacd.run_coacd keywords, on top of COACD_OPTIONS."""
-    with tempfile.TemporaryDirectory(prefix="suctionbench-coacd-") as folder:
-        job, result = Path(folder) / "job.npz", Path(folder) / "parts.npz"
-        np.savez(
-            job,
-            vertices=np.ascontiguousarray(vertices, dtype=np.float64),
-            faces=np.ascontiguousarray(faces, dtype=np.int64),
-            threshold=float(threshold),
-            max_hulls=int(max_hulls),
-            seed=int(seed),
-            options=json.dumps({**COACD_OPTIONS, **(options or {})}),
-        )
-        env = {**os.environ, "PYTHONFAULTHANDLER": "0", PARENT_ENV: str(os.getpid())}
-        try:
-            done = subprocess.run(
-                _child_command(job, result), capture_output=True, timeout=COACD_TIMEOUT, env=env, check=False
-            )
-        except subprocess.TimeoutExpired:
-            raise CoacdFailed(f"CoACD ran past {COACD_TIMEOUT:g} s and was stopped") from None
-        if done.returncode != 0 or not result.is_file():
-            raise CoacdFailed(_describe_exit(done.returncode, done.stderr))
-        with np.load(result) as data:
-            count = int(data["count"])
-            return [(data[f"v{i}"], data[f"f{i}"]) for i in range(count)]
+    return CoacdRun(vertices, faces, threshold, max_hulls, seed, options).parts()
 
 
 def _describe_exit(code: int, stderr: bytes) -> str:

@@ -3,6 +3,7 @@ one closed solid (see `suctionbench.objects.repair`), decompose, compute stable 
 
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 
@@ -74,4 +75,5 @@ def import_mesh(
         scale=scale,
         mass=mass,
         coacd=(IMPORT_SCHEDULE, IMPORT_OPTIONS),
+        coacd_parallel=len(os.sched_getaffinity(0)),  # the user waits: the schedule's tries side by side
     )

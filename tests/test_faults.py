@@ -136,9 +136,9 @@ def test_coacd_child_dies_with_its_killed_parent(tmp_path):
            "TMPDIR": str(tmp_path), "FAKE_COACD_STARTED": str(started)}
     script = textwrap.dedent("""
         import trimesh
-        from suctionbench.objects.decompose import run_coacd
+        from suctionbench.objects.decompose import CoacdRun
         box = trimesh.creation.box()
-        run_coacd(box.vertices, box.faces, 0.05, 8)
+        CoacdRun(box.vertices, box.faces, 0.05, 8).parts()
     """)
     parent = subprocess.Popen([sys.executable, "-c", script], env=env)
     try:

@@ -375,7 +375,8 @@ def test_coacd_tries_side_by_side_give_the_same_parts_and_leave_nothing(corpus, 
     one, info_one = decompose_mesh(solid, schedule=schedule, options=IMPORT_OPTIONS, parallel=1)
     three, info_three = decompose_mesh(solid, schedule=schedule, options=IMPORT_OPTIONS, parallel=3)
     assert info_one == info_three and info_one["threshold"] == 0.05
-    assert len(one) == len(three) and all(np.array_equal(a.vertices, b.vertices) for a, b in zip(one, three))
+    assert len(one) == len(three)
+    assert all(np.array_equal(a.vertices, b.vertices) for a, b in zip(one, three, strict=True))
     assert list((tmp_path / "tmp").iterdir()) == []
     children = Path(f"/proc/{os.getpid()}/task/{os.getpid()}/children")
     if children.exists():

@@ -28,7 +28,7 @@ from suctionbench.config import CUP_DEFAULT
 from suctionbench.errors import InputError
 from suctionbench.geometry.mesh import mesh_scale, validate_mesh
 from suctionbench.io import WRITE_ERRNOS, os_error_reason, publish_dir, staging_dir
-from suctionbench.objects.decompose import CoacdFailed, CoacdRun, run_coacd
+from suctionbench.objects.decompose import CoacdFailed, CoacdRun
 from suctionbench.objects.mass import MassModel, MassProperties, mass_properties, over_cap_message, resolve_mass
 from suctionbench.objects.ownership import check_replaceable_objects
 from suctionbench.objects.spec import ObjectSpec
@@ -172,7 +172,8 @@ def convex_parts(
 ) -> list[trimesh.Trimesh]:
     """Convex decomposition with CoACD (MuJoCo collides meshes by their convex hulls), run in a child
     process (suctionbench.objects.decompose) so that a native crash raises CoacdFailed here."""
-    return _hulls(run_coacd(np.asarray(mesh.vertices), np.asarray(mesh.faces), threshold, max_hulls, seed, options))
+    run = CoacdRun(np.asarray(mesh.vertices), np.asarray(mesh.faces), threshold, max_hulls, seed, options)
+    return _hulls(run.parts())
 
 
 def _hulls(raw: list[tuple[np.ndarray, np.ndarray]]) -> list[trimesh.Trimesh]:

@@ -121,20 +121,6 @@ class CoacdRun:
         self._folder.cleanup()
 
 
-def run_coacd(
-    vertices: np.ndarray,
-    faces: np.ndarray,
-    threshold: float,
-    max_hulls: int,
-    seed: int = 0,
-    options: dict | None = None,
-) -> list[tuple[np.ndarray, np.ndarray]]:
-    """(vertices, faces) of each convex part CoACD finds, computed in a child process.
-
-    `options` are further coacd.run_coacd keywords, on top of COACD_OPTIONS."""
-    return CoacdRun(vertices, faces, threshold, max_hulls, seed, options).parts()
-
-
 def _describe_exit(code: int, stderr: bytes) -> str:
     if code < 0:
         try:

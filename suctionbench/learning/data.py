@@ -447,6 +447,11 @@ class SplitData:
         """Shards holding at least one datapoint of the split, ascending."""
         return sorted(self._local)
 
+    def rows(self, shard: int) -> np.ndarray:
+        """The split's rows of `shard` (indices within the shard, ascending): `load_shard`'s order,
+        for reading other fields of the same datapoints (`reader.shard(shard, fields=...)[name][rows]`)."""
+        return self._local[shard]
+
     def subset(self, count: int, rng: np.random.Generator) -> SplitData:
         """At most `count` of this split's datapoints, sharing its reader: its datapoints in whole
         shards taken in a random order (drawn with `rng`), the last one cut to make up the count.

@@ -341,3 +341,32 @@ def bench_bin(*, counts: list[int], policy: str, attempts: int, seed: int, cores
                      "attempt_sim_s": round(float(np.mean(sims)), 3),
                      "single_pick_s": round(single_s, 3), "attempt_over_single": round(attempt_s / single_s, 2)})
     return {"policy": policy, "cores": used_cores, "seed": seed, "rows": rows}
+
+
+def bench_import(*, mesh: str, units: str, scale: float, cores: int) -> dict[str, Any]:
+    """Seconds to import `mesh` (read, repair, decompose, stable poses) with the convex
+    decomposition's tries side by side on `cores` against the reference, one after another, in
+    one run (temporary object roots), and whether both give the same object."""
+    import tempfile
+    from pathlib import Path
+
+    from suctionbench.objects.importer import import_mesh
+
+    used_cores = _limit_cores(cores)
+    seconds, records = {}, {}
+    with tempfile.TemporaryDirectory(prefix="suctionbench-bench-import-") as folder:
+        for name, parallel in (("one_by_one", 1), ("side_by_side", used_cores)):
+            start = time.perf_counter()
+            records[name] = import_mesh(mesh, set_name="bench", name=name.replace("_", "-"), units=units,
+                                        scale=scale, root=Path(folder), coacd_parallel=parallel)
+            seconds[name] = time.perf_counter() - start
+    fast, reference = records["side_by_side"], records["one_by_one"]
+    same = fast.geometry_hash == reference.geometry_hash and fast.decomposition == reference.decomposition
+    return {
+        "mesh": mesh, "faces": fast.faces, "units": fast.units, "cores": used_cores,
+        "decomposition": {k: fast.decomposition.get(k) for k in ("method", "threshold", "max_convex_hull",
+                                                                 "coverage", "excess")},
+        "parts": len(fast.parts), "seconds_side_by_side": round(seconds["side_by_side"], 2),
+        "seconds_one_by_one": round(seconds["one_by_one"], 2),
+        "speedup": round(seconds["one_by_one"] / seconds["side_by_side"], 2), "same_object": bool(same),
+    }

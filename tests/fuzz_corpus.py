@@ -408,6 +408,9 @@ def cases(p: dict[str, Path]) -> list[Case]:
     for argv in (["--datapoints", "0"], ["--datapoints", "-1"], ["--workers", "-1"], ["--objects", "nope"],
                  ["--seed", "-1"]):
         add("bench generate", "bench", "generate", "--datapoints", "4", "--workers", "1", *argv)
+    for argv in (["--scale", "nan"], ["--scale", "-1"], ["--cores", "-1"], ["--units", "ft"]):
+        add("bench import", "bench", "import", p["mesh_garbage.stl"], *argv)
+    add("bench import", "bench", "import", p["mesh_garbage.stl"])
 
     # objects
     for argv in (["--count", "0"], ["--count", "-1"], ["--seed", "-1"], ["--workers", "-1"],

@@ -383,6 +383,18 @@ def test_coacd_tries_side_by_side_give_the_same_parts_and_leave_nothing(corpus, 
         assert children.read_text().split() == []
 
 
+def test_bench_import_times_both_ways_and_gets_the_same_object(corpus):
+    from typer.testing import CliRunner
+
+    from suctionbench.cli import app
+
+    result = CliRunner().invoke(app, ["bench", "import", str(corpus["touching_bracket.obj"].path), "--json"])
+    assert result.exit_code == 0, result.output[-2000:]
+    line = json.loads(result.stdout.strip().splitlines()[-1])
+    assert line["ok"] and line["same_object"] is True and line["parts"] >= 2
+    assert line["seconds_one_by_one"] > 0 and line["seconds_side_by_side"] > 0
+
+
 def test_cli_import_crash_exits_2_with_a_json_line(corpus, tmp_path):
     """A real child that aborts (SIGABRT): the CLI process survives, prints its JSON line, exits 2."""
     import subprocess

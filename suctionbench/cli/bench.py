@@ -6,7 +6,16 @@ from typing import Annotated, Any
 
 import typer
 
-from suctionbench.cli.common import JsonOpt, SeedOpt, bench_app, print_kv, print_rows, resolve_workers, run_command
+from suctionbench.cli.common import (
+    JsonOpt,
+    SeedOpt,
+    UnitsOpt,
+    bench_app,
+    print_kv,
+    print_rows,
+    resolve_workers,
+    run_command,
+)
 from suctionbench.errors import InputError
 
 
@@ -167,6 +176,28 @@ def bench_plan_cmd(
                             cores=cores)
         if not as_json:
             print_kv("bench plan", result)
+        return result
+
+    run_command(as_json, body)
+
+
+@bench_app.command("import")
+def bench_import_cmd(
+    mesh: Annotated[str, typer.Argument(help="Mesh file to import (OBJ, STL, PLY, OFF, GLB, GLTF).")],
+    units: UnitsOpt = "auto",
+    scale: Annotated[float, typer.Option(help="Extra scale factor on top of --units.")] = 1.0,
+    cores: Annotated[int, typer.Option(help="CPU cores the process may use (0 = all).")] = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Seconds to import a mesh with the convex decomposition's tries side by side against one
+    after another (the reference), in one run, and whether both give the same object."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench.bench import bench_import
+
+        result = bench_import(mesh=mesh, units=units, scale=scale, cores=cores)
+        if not as_json:
+            print_kv("bench import: side by side vs one by one", result)
         return result
 
     run_command(as_json, body)

@@ -47,6 +47,7 @@ def import_mesh(
     try_repair: bool = True,
     overwrite: bool = False,
     root: Path | None = None,
+    coacd_parallel: int | None = None,
 ) -> ObjectRecord:
     """Import a mesh file into SET/NAME under the user object root (or `root`).
 
@@ -56,7 +57,8 @@ def import_mesh(
     touching or overlapping pieces united, small holes closed, stray open sheets dropped), then
     built (mass, stable poses, convex parts). What was repaired is kept in the record's
     ``params["repairs"]``. With ``try_repair=False`` a mesh that needs any repair beyond merging
-    seams is rejected instead.
+    seams is rejected instead. `coacd_parallel`: the convex decomposition's tries run at once
+    (`build.decompose_mesh`; None: one per core this process may use, as the user waits).
     """
     out_dir = import_target(set_name, name, root=root, overwrite=overwrite)
     info = load_mesh(path, units=units, scale=scale)
@@ -75,5 +77,5 @@ def import_mesh(
         scale=scale,
         mass=mass,
         coacd=(IMPORT_SCHEDULE, IMPORT_OPTIONS),
-        coacd_parallel=len(os.sched_getaffinity(0)),  # the user waits: the schedule's tries side by side
+        coacd_parallel=coacd_parallel or len(os.sched_getaffinity(0)),
     )

@@ -1,4 +1,4 @@
-"""`suctionbench bench label|episode|bin|agreement|generate|plan`: speed and agreement figures."""
+"""`suctionbench bench label|episode|bin|agreement|generate|plan|import`: speed and agreement figures."""
 
 from __future__ import annotations
 
@@ -19,6 +19,21 @@ from suctionbench.cli.common import (
 from suctionbench.errors import InputError
 
 
+def _run_bench(as_json: bool, title: str, function: str, **kwargs: Any) -> None:
+    """Run `suctionbench.bench.<function>(**kwargs)` as the command: its result printed as key-values
+    under `title` (or as the JSON line). The module is imported only when the command runs."""
+
+    def body() -> dict[str, Any]:
+        from suctionbench import bench
+
+        result = getattr(bench, function)(**kwargs)
+        if not as_json:
+            print_kv(title, result)
+        return result
+
+    run_command(as_json, body)
+
+
 @bench_app.command("label")
 def bench_label(
     mesh: Annotated[str | None, typer.Option(help="Mesh to label (default: the shipped ~10k-face soap bar).")] = None,
@@ -34,18 +49,9 @@ def bench_label(
     """Robust labels/s of the vectorised path vs the per-sample reference (one QP and one
     ray-cast pass per sample), their agreement, and peak memory."""
 
-    def body() -> dict[str, Any]:
-        from suctionbench.bench import bench_label as run_bench
-
-        result = run_bench(
-            mesh=mesh, mass=mass, grasps=grasps, reference_grasps=reference_grasps, samples=samples,
-            memory_grasps=memory_grasps, cores=cores, seed=seed,
-        )
-        if not as_json:
-            print_kv("bench label: vectorised vs reference", result)
-        return result
-
-    run_command(as_json, body)
+    _run_bench(as_json, "bench label: vectorised vs reference", "bench_label", mesh=mesh, mass=mass, grasps=grasps,
+               reference_grasps=reference_grasps, samples=samples, memory_grasps=memory_grasps, cores=cores,
+               seed=seed)
 
 
 @bench_app.command("bin")
@@ -85,15 +91,8 @@ def bench_episode_cmd(
 ) -> None:
     """Pick episodes per second (rendering the observation included), sim/wall time, render time."""
 
-    def body() -> dict[str, Any]:
-        from suctionbench.bench import bench_episode
-
-        result = bench_episode(object_key=object_key, episodes=episodes, cores=cores, seed=seed)
-        if not as_json:
-            print_kv("bench episode", result)
-        return result
-
-    run_command(as_json, body)
+    _run_bench(as_json, "bench episode", "bench_episode", object_key=object_key, episodes=episodes, cores=cores,
+               seed=seed)
 
 
 @bench_app.command("agreement")
@@ -135,16 +134,8 @@ def bench_generate_cmd(
 ) -> None:
     """Dataset generation datapoints/s (all cores vs one), render ms/frame, label ms/grasp, memory."""
 
-    def body() -> dict[str, Any]:
-        from suctionbench.bench import bench_generate
-
-        result = bench_generate(objects=objects, datapoints=datapoints, workers=resolve_workers(workers),
-                                seed=seed)
-        if not as_json:
-            print_kv("bench generate", result)
-        return result
-
-    run_command(as_json, body)
+    _run_bench(as_json, "bench generate", "bench_generate", objects=objects, datapoints=datapoints,
+               workers=resolve_workers(workers), seed=seed)
 
 
 @bench_app.command("plan")
@@ -192,12 +183,5 @@ def bench_import_cmd(
     """Seconds to import a mesh with the convex decomposition's tries side by side against one
     after another (the reference), in one run, and whether both give the same object."""
 
-    def body() -> dict[str, Any]:
-        from suctionbench.bench import bench_import
-
-        result = bench_import(mesh=mesh, units=units, scale=scale, cores=cores)
-        if not as_json:
-            print_kv("bench import: side by side vs one by one", result)
-        return result
-
-    run_command(as_json, body)
+    _run_bench(as_json, "bench import: side by side vs one by one", "bench_import", mesh=mesh, units=units,
+               scale=scale, cores=cores)

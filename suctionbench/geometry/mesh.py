@@ -65,22 +65,16 @@ class MeshInfo:
         return np.asarray(self.mesh.centroid, dtype=float)
 
 
-def resolve_units(path: str | Path, units: str, largest: float, scale: float = 1.0) -> str:
-    """The units a file of `largest` extent (file units, times `scale`) is read in: `units` itself
-    unless it is "auto" (see `AUTO_UNITS`); InputError naming the units that would fit where the
-    size is implausible as read."""
-    units = units.lower()
-    if units != "auto":
-        mesh_scale(units, scale)  # validates units and scale
-        candidates: tuple[str, ...] = (units,)
-    else:
-        mesh_scale("m", scale)
-        candidates = AUTO_UNITS.get(Path(path).suffix.lower(), ("m",))
+def resolve_units(path: str | Path, units: str, size: float) -> str:
+    """The units a file whose largest extent is `size` file units (times any extra scale) is read
+    in: `units` itself unless it is "auto" (see `AUTO_UNITS`); InputError naming the units that
+    would fit where the size is implausible as read. `units` is lower case and valid."""
+    candidates = AUTO_UNITS.get(Path(path).suffix.lower(), ("m",)) if units == "auto" else (units,)
+    fits = [u for u in UNIT_SCALES if MIN_EXTENT <= size * UNIT_SCALES[u] <= MAX_EXTENT]
     for candidate in candidates:
-        if MIN_EXTENT <= largest * scale * UNIT_SCALES[candidate] <= MAX_EXTENT:
+        if candidate in fits:
             return candidate
-    read = ", ".join(f"{largest * scale:.4g} {u} read in {u}" for u in candidates)
-    fits = [u for u in UNIT_SCALES if MIN_EXTENT <= largest * scale * UNIT_SCALES[u] <= MAX_EXTENT]
+    read = ", ".join(f"{size:.4g} {u} read in {u}" for u in candidates)
     hint = f"it fits read in {' or '.join(fits)}" if fits else "no unit (m, cm, mm, in) fits it"
     raise InputError(
         f"mesh '{path}': absurd scale (largest extent {read}; expected {MIN_EXTENT:g}-{MAX_EXTENT:g} m; "
@@ -135,13 +129,13 @@ def read_mesh(path: str | Path) -> trimesh.Trimesh:
 def load_mesh(path: str | Path, units: str = "auto", scale: float = 1.0) -> MeshInfo:
     """Read a mesh file, convert it to metres (`units` times `scale`; "auto": see `AUTO_UNITS`) and
     validate it (see `validate_mesh`). The units it was read in are the result's `units`."""
-    mesh_scale(units if units.lower() != "auto" else "m", scale)
+    units = units.lower()
+    mesh_scale("m" if units == "auto" else units, scale)  # bad units or scale fail before the file is read
     loaded = read_mesh(path)
     if not np.all(np.isfinite(loaded.vertices)):
         raise InputError(f"mesh '{path}': vertices contain NaN or infinite coordinates")
     loaded.process(validate=False)
-    used = np.asarray(loaded.vertices)[np.unique(loaded.faces)]  # a stray vertex is no part of the size
-    units = resolve_units(path, units, float(np.ptp(used, axis=0).max()), scale)
+    units = resolve_units(path, units, float(loaded.extents.max()) * scale)  # extents: referenced vertices only
     factor = mesh_scale(units, scale)
     if factor != 1.0:
         loaded.apply_scale(factor)

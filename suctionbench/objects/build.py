@@ -201,20 +201,15 @@ def decompose_mesh(
     vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
     schedule = list(schedule)
     count = len(schedule)
+    parallel = max(1, parallel)
+    # launch order: with two or more at once, tries 0..i are running by the time try i is judged
     launch = [0, count - 1, *range(1, count - 1)] if parallel > 1 and count > 2 else list(range(count))
     runs: dict[int, CoacdRun] = {}
-
-    def start(index: int) -> None:
-        threshold, max_hulls = schedule[index]
-        runs[index] = CoacdRun(vertices, faces, threshold, max_hulls, options=options)
-
     try:
         for index, (threshold, max_hulls) in enumerate(schedule):
-            while launch and len(runs) < max(1, parallel):
-                start(launch.pop(0))
-            if index not in runs:
-                launch.remove(index)
-                start(index)
+            while launch and len(runs) < parallel:
+                started = launch.pop(0)
+                runs[started] = CoacdRun(vertices, faces, *schedule[started], options=options)
             run = runs.pop(index)
             try:
                 parts = _hulls(run.parts())

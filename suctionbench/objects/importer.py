@@ -65,15 +65,14 @@ def import_mesh(
     solid = solidify(info.mesh, source=str(path))
     if solid.notes and not try_repair:
         raise InputError(f"mesh '{path}': needs repair ({solid.notes[0]}) and repairs are off (--no-repair)")
-    units = info.units
-    params = {"units": units, "scale": float(scale), "repairs": solid.notes}
+    params = {"units": info.units, "scale": float(scale), "repairs": solid.notes}
     spec = ObjectSpec(name=name, set=set_name, generator="import", params=params, description=f"imported from {path}")
     return build_object(
         solid.mesh,
         spec,
         out_dir,
         source=str(path),
-        units=units,
+        units=info.units,
         scale=scale,
         mass=mass,
         coacd=(IMPORT_SCHEDULE, IMPORT_OPTIONS),

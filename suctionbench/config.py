@@ -283,6 +283,17 @@ TOUCH_DOWN_COMPRESSION = 0.004
 EpisodeConfig.compression_stop, two thirds of the default cup's 6 mm stroke): the press the object
 carries while the seal forms, 6 N on the default cup's 1500 N/m bellows."""
 
+TRANSPORT_TIMES = (0.8, 1.6)
+"""The range of a pick episode's transport times (s) the labeller draws from
+(PerturbationConfig.transport_time_max). The transport (sim/episode.py, `PickEpisode._carry`) is a
+straight min-jerk move from the lift's end to the tool tip's place over the bin, at least
+EpisodeConfig.transport_min_time (0.8 s), longer where the cup's rated acceleration
+(T = sqrt(5.774 L / a): 0.35 m at 3.1 m/s^2 take 0.81 s) or the joints' speed limits ask for it.
+Over 300 random transports from the workspace (lift ends within 10 cm of its centre, 0.15-0.3 m
+high, tools up to 45 deg off vertical; 0.23-0.49 m long): 10 % take the shortest 0.8 s, half at most
+1.02 s, 90 % at most 1.65 s, the longest 2.16 s (the tilted tools' joint travel). The upper end is
+that 90th percentile: a longer transport is gentler still (the response factor falls towards 1)."""
+
 CUP_DEFAULT = CupConfig()
 """The physical cup: 15 mm silicone bellows, 60 kPa ejector, V = 60 kPa x pi (6.5 mm)^2 = 7.96 N,
 ring-pressure tilt limit."""
@@ -387,8 +398,24 @@ class PerturbationConfig:
 
     transport_time: float = 0.9
     """Duration (s) of the min-jerk transport, whose acceleration peaks at inertial_acceleration:
-    how fast the transport's inertial load reaches the swing (contact/arrival.py). The episode times
-    each transport by the arm's path; 0.87-1.24 s measured on five basic and typical picks."""
+    how fast the transport's inertial load reaches the swing (contact/arrival.py); the shortest
+    transport where `transport_time_max` is longer."""
+
+    transport_time_max: float | None = None
+    """The longest transport (s). Where set (and longer than `transport_time`), each sample's
+    transport lasts a time drawn uniformly from [transport_time, transport_time_max] in the grasp's
+    keyed stream (after the azimuth): how long the transport lasts depends on where the object lies
+    relative to the bin, unknown when labelling, and the swing's overshoot depends on it (the
+    response factor of contact/arrival.py peaks where the motion lasts about one swing period).
+    `for_episode` sets the episode's range, TRANSPORT_TIMES."""
+
+    transport_direction: tuple[float, float, float] | None = None
+    """The transport's direction (mesh frame; normalised) where the pick's motion is known when
+    labelling: the episode's labeller, whose planned transport runs straight from the lift's end
+    to the bin (`PickEpisode.planned_transport`). The transport is then two load cases instead of
+    one at a random azimuth: the start's push against it and the braking's along it, each with its
+    own side of the swing's response (contact/arrival.py), over the planned `transport_time`.
+    None: unknown (a dataset's labels), azimuths drawn per sample."""
 
     press_compression: float = 0.0
     """Compression (m) of the bellows at which the pick's touch-down stops and holds while the
@@ -414,7 +441,7 @@ class PerturbationConfig:
         """The environment model of a pick episode: the paper's perturbations plus the inertial load
         of the cup's peak acceleration (cup.peak_acceleration) and the touch-down's press."""
         return cls(**{"inertial_acceleration": cup.peak_acceleration, "press_compression": TOUCH_DOWN_COMPRESSION,
-                      **kwargs})
+                      "transport_time": TRANSPORT_TIMES[0], "transport_time_max": TRANSPORT_TIMES[1], **kwargs})
 
     def __post_init__(self) -> None:
         if self.num_samples < 1:
@@ -422,8 +449,18 @@ class PerturbationConfig:
         for name in ("lift_height", "lift_time", "transport_time"):
             if not getattr(self, name) > 0.0:
                 raise InputError(f"perturbation config: {name} = {getattr(self, name)!r} must be > 0")
+        if self.transport_time_max is not None and not self.transport_time_max >= self.transport_time:
+            raise InputError(f"perturbation config: transport_time_max = {self.transport_time_max!r} must be "
+                             f">= transport_time = {self.transport_time!r}")
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
+            if f.name in ("transport_time_max", "transport_direction") and value is None:
+                continue
+            if f.name == "transport_direction":
+                if len(value) != 3 or not all(math.isfinite(v) for v in value) or not any(value):
+                    raise InputError(f"perturbation config: transport_direction = {value!r} must be 3 finite "
+                                     "numbers, not all zero")
+                continue
             if f.name != "num_samples" and (not math.isfinite(value) or value < 0):
                 raise InputError(f"perturbation config: {f.name} = {value!r} must be finite and >= 0")
 

@@ -165,7 +165,8 @@ class BinRunner:
         world_mesh, com = self.episode.posed_mesh(body, mesh, record.com)
         mass, com = self.episode.loaded(body, record.mass, com)
         seed = int(np.random.default_rng((self.request.task.seed, self.request.trial, attempt, 4)).integers(2**31))
-        return grasp_labels(world_mesh, com, mass, self.request.cup, point, approach, seed)
+        return grasp_labels(world_mesh, com, mass, self.request.cup, point, approach, seed,
+                            self.episode.planned_transport(point, approach))
 
     def run(self, log: Any = None) -> dict[str, Any]:
         """Fill the bin and pick until it is clear, K failures in a row, or the attempt limit; the

@@ -12,7 +12,7 @@ from suctionbench.config import STANDARD_GRAVITY, LabelConfig
 from suctionbench.contact.arrival import table_support
 from suctionbench.contact.metrics import METRICS, GraspLabels
 from suctionbench.contact.press import Footprint, stays_put
-from suctionbench.contact.robust import ObjectState, arrivals, inertial_forces, robust_wrench_resistance
+from suctionbench.contact.robust import ObjectState, arrivals, inertial_forces, planned_forces, robust_wrench_resistance
 from suctionbench.contact.seal import PUSHED_AWAY, SealModel, SealResult
 from suctionbench.contact.wrench import lip_load, resists
 from suctionbench.errors import InputError
@@ -116,12 +116,15 @@ class SuctionLabeller:
     def nominal_lip_loads(self, frames: np.ndarray, seal: SealResult) -> list[np.ndarray]:
         """The wrench (N, 6) the lip carries in each nominal load case (`lip_load`, at the swing's
         turning point): the weight alone, or with an inertial load the lift and the transport at
-        each of NOMINAL_TRANSPORT_AZIMUTHS, for grasps of contact `frames` (N, 3, 3) and their `seal`."""
+        each of NOMINAL_TRANSPORT_AZIMUTHS (its start and its braking where its direction is
+        known), for grasps of contact `frames` (N, 3, 3) and their `seal`."""
         count = len(frames)
         weight = np.broadcast_to(self.object.gravity_force, (count, 3))
         inertial = np.zeros((count, 1, 3))
         motion = self.config.perturbation
-        if motion.inertial_acceleration > 0.0:
+        if motion.inertial_acceleration > 0.0 and motion.transport_direction is not None:
+            inertial = np.broadcast_to(planned_forces(self.object.mass, self.object.gravity, motion), (count, 3, 3))
+        elif motion.inertial_acceleration > 0.0:
             azimuths = np.broadcast_to(NOMINAL_TRANSPORT_AZIMUTHS, (count, len(NOMINAL_TRANSPORT_AZIMUTHS)))
             inertial = inertial_forces(self.object.mass, self.object.gravity, motion.inertial_acceleration, frames,
                                        azimuths, motion.lift_acceleration)

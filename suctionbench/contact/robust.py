@@ -17,7 +17,7 @@ the lift (a_cup straight up at the lift's own peak, PerturbationConfig.lift_acce
 the object hangs with m (g + a_lift)) and the transport (a_cup
 horizontal, direction unknown when labelling: its azimuth round the vertical is drawn uniformly per
 sample from the grasp's keyed stream, after the paper's 19 draws so that a = 0 reproduces the
-paper's labels bit for bit). A sample resists iff it resists every load case. The static weight
+paper's labels bit for bit; its duration likewise, from the episode's range, after the azimuth). A sample resists iff it resists every load case. The static weight
 needs no case of its own: it lies on the segment between the zero wrench and the lift case, and
 the set of resisted wrenches is convex. The azimuth is measured from the nominal contact frame's x
 axis projected on the horizontal, so labels stay invariant under rigid motions. How each load
@@ -94,6 +94,10 @@ class GraspSamples:
     friction: np.ndarray
     """(N*J,) friction coefficients."""
 
+    transport_time: np.ndarray | None
+    """(N*J,) each sample's transport time (s), drawn from the config's range; None: the config's
+    fixed transport_time."""
+
     inertial: np.ndarray
     """(N*J, L, 3) inertial force -m a_cup of each load case (lift, transport) in the perturbed mesh
     frame; L = 0 without inertial load."""
@@ -107,16 +111,19 @@ class GraspSamples:
 
 
 def arrivals(obj: ObjectState, config: PerturbationConfig, cup: CupConfig, weight: np.ndarray,
-             inertial: np.ndarray) -> list[Arrival] | None:
+             inertial: np.ndarray, transport_time: np.ndarray | None = None) -> list[Arrival] | None:
     """One `Arrival` per load case for rows of weight (N, 3) and inertial forces (N, L, 3) (lift,
-    then transports; L = 0: the lift with the weight alone), or None where the object's inertia or
-    support is unknown (the step bound)."""
+    then transports; L = 0: the lift with the weight alone), with each row's transport time (N,)
+    (None: the config's fixed one), or None where the object's inertia or support is unknown (the
+    step bound)."""
     if obj.inertia is None or obj.support is None:
         return None
+    duration = config.transport_time if transport_time is None else transport_time
     return [
         Arrival(weight, None if case == 0 else inertial[:, case], np.asarray(obj.inertia, dtype=float), obj.mass,
                 np.asarray(obj.support, dtype=float), config.lift_height, config.lift_time,
-                config.transport_time, cup.axial_stiffness, cup.swing_damping_ratio)
+                duration, cup.axial_stiffness, cup.swing_damping_ratio,
+                braking=case == 2 and config.transport_direction is not None)
         for case in range(max(inertial.shape[1], 1))
     ]
 
@@ -143,6 +150,18 @@ def inertial_forces(
     return np.concatenate([lift, -(mass * acceleration) * horizontal], axis=1)
 
 
+def planned_forces(mass: float, gravity: np.ndarray, config: PerturbationConfig) -> np.ndarray:
+    """(3, 3) inertial forces -m a_cup of a pick whose transport's direction d is known
+    (config.transport_direction, mesh frame): the lift (m a_lift along gravity), the transport's
+    start (-m a d: the object pushed back as the cup sets off) and its braking (+m a d)."""
+    along = np.asarray(config.transport_direction, dtype=float)
+    along = along / np.linalg.norm(along)
+    gravity = np.asarray(gravity, dtype=float)
+    down = gravity / max(float(np.linalg.norm(gravity)), 1e-12)
+    push = mass * config.inertial_acceleration * along
+    return np.stack([mass * config.lift_acceleration * down, -push, push])
+
+
 def truncated_normal(u: np.ndarray, mean: float, std: float, low: float, high: float) -> np.ndarray:
     """Map uniforms u in [0, 1) to a normal(mean, std) truncated to [low, high] (inverse CDF)."""
     if std == 0.0:
@@ -165,12 +184,18 @@ def sample_perturbations(
     ids = np.arange(count) if grasp_ids is None else np.asarray(grasp_ids)
     noise = np.empty((count, j, 19))
     inertial = config.inertial_acceleration > 0.0
+    known = inertial and config.transport_direction is not None
+    t_min, t_max = config.transport_time, config.transport_time_max
+    spread = inertial and not known and t_max is not None and t_max > t_min
     azimuth = np.empty((count, j))
+    duration = np.empty((count, j)) if spread else None
     for row, gid in enumerate(ids):  # one short stream per grasp: batch-independent labels
         stream = np.random.default_rng((int(seed), int(gid)))
         noise[row] = stream.standard_normal((j, 19))
-        if inertial:  # drawn after the paper's perturbations, which a = 0 leaves untouched
+        if inertial and not known:  # drawn after the paper's perturbations, which a = 0 leaves untouched
             azimuth[row] = 2.0 * np.pi * stream.random(j)
+        if spread:  # and after the azimuth, which a fixed transport time leaves untouched
+            duration[row] = t_min + (t_max - t_min) * stream.random(j)
     noise[:, :, 18] = ndtr(noise[:, :, 18])  # the friction draw, as a uniform
 
     def in_world(cols: slice, std: float) -> np.ndarray:
@@ -195,7 +220,10 @@ def sample_perturbations(
     mu = truncated_normal(
         noise[:, :, 18], cup.friction, config.friction_std, config.friction_min, config.friction_max
     )
-    if inertial:  # (N, J, 2, 3): lift and transport, rotated into the perturbed object frame
+    if known:  # (N, J, 3, 3): the lift, the start's push and the braking along the planned line
+        cases = np.broadcast_to(planned_forces(obj.mass, obj.gravity, config), (count, j, 3, 3))
+        extra = np.einsum("nsij,nskj->nski", inv, cases).reshape(-1, 3, 3)
+    elif inertial:  # (N, J, 2, 3): lift and transport, rotated into the perturbed object frame
         cases = inertial_forces(obj.mass, obj.gravity, config.inertial_acceleration, frames, azimuth,
                                 config.lift_acceleration)
         lift = np.broadcast_to(cases[:, None, 0], (count, j, 3))
@@ -209,6 +237,7 @@ def sample_perturbations(
         com=(com + com_shift).reshape(-1, 3),
         force=force.reshape(-1, 3),
         friction=mu.reshape(-1),
+        transport_time=None if duration is None else duration.reshape(-1),
         inertial=extra,
     )
 
@@ -306,7 +335,7 @@ def robust_wrench_resistance(
     for start in range(0, count, step):
         sl = slice(start, start + step)
         samples = sample_perturbations(points[sl], frames[sl], obj, seal.cup, config, seed, ids[sl])
-        cases = arrivals(obj, config, seal.cup, samples.force, samples.inertial)
+        cases = arrivals(obj, config, seal.cup, samples.force, samples.inertial, samples.transport_time)
         ok = run(seal, samples, cases)
         if obj.footprint is not None and config.press_compression > 0.0:
             # The object rests on its footprint when pressed: its weight and centre of mass are

@@ -350,7 +350,7 @@ def _arrived_tilt(swing: _Swing, phi_s: np.ndarray, arrival: Arrival, com: np.nd
     rest = swing.work(still)
     step = _turning_tilt(lambda p: swing.work(p) - rest, phi_s)  # the step's turning point from phi_0
     period = 2.0 * np.pi * np.sqrt(inertia / np.maximum(swing.stiffness(phi_s), 1e-12))
-    factor = response_factor(arrival.transport_time / np.maximum(period, 1e-12), arrival.zeta)
+    factor = response_factor(arrival.transport_time / np.maximum(period, 1e-12), arrival.zeta, arrival.braking)
     carried = np.where(still < phi_s, phi_s + (factor - 1.0) * (step - phi_s), phi_s)
     hanging = _Swing(arrival.weight, com, ring_centre, frames, cup)
     hang = hanging.static_tilt()

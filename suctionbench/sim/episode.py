@@ -3,7 +3,8 @@ the bin, hold, release - with a recorded outcome and failure reason.
 
 Motion: inverse kinematics for the tool tip (position + tool axis; the cup is symmetric about
 its axis), joint trajectories with quintic (minimum-jerk) time scaling stretched until every
-joint stays under its YuMi speed limit, straight Cartesian lines for the approach and the lift.
+joint stays under its YuMi speed limit, straight Cartesian lines for the approach, the lift and the
+transport (which keeps the grasp's orientation: `PickEpisode._carry`).
 The arm follows through stiff position actuators. Vacuum: `SuctionController`.
 
 Success (issue 4): the object is lifted clear of the table, carried over the bin and still held at
@@ -22,6 +23,7 @@ import mujoco
 import numpy as np
 
 from suctionbench import minjerk
+from suctionbench.config import TRANSPORT_TIMES
 from suctionbench.sim.cup import SuctionController
 from suctionbench.sim.ik import solve_ik
 from suctionbench.sim.scene import Scene
@@ -42,8 +44,10 @@ FAILURES = (
 grasp in the observation, so nothing was executed)."""
 
 
-ACCELERATION_SAMPLES = 101
-"""Points of a commanded motion at which its tool-tip acceleration is checked against the rating."""
+CARRY_STEP = 0.01
+"""Spacing (m) of the transport's IK waypoints along its straight line (the lift's 5 mm over its
+15 cm; the transport runs 0.2-0.5 m, and between waypoints 1 cm apart the joint-space chord strays
+from the line by well under a millimetre)."""
 
 REST_LEVER = 0.05
 """Length (m) that turns the object's rotation into a motion for the rest test: a point 5 cm from
@@ -125,6 +129,11 @@ class EpisodeConfig:
 
     transport_height: float = 0.25
     """Height of the tool tip above the table over the bin."""
+
+    transport_min_time: float = TRANSPORT_TIMES[0]
+    """Shortest transport (s); longer where the joints' speed limits or the cup's rated acceleration
+    ask for it (`PickEpisode._carry_time`). The labeller's range of transport times
+    (config.TRANSPORT_TIMES) starts here."""
 
     speed_scale: float = 0.5
     """Fraction of the YuMi's joint speed limits used by trajectories."""
@@ -391,21 +400,18 @@ class PickEpisode:
         mujoco.mj_kinematics(self.model, d)
         return tips
 
-    def _within_rated_acceleration(self, waypoints: np.ndarray, duration: float) -> float:
-        """`duration`, lengthened where the min-jerk joint motion along `waypoints` would accelerate
-        the tool tip beyond the cup's rated `CupConfig.peak_acceleration` (the inertial load the
-        labeller and the mass cap assume), as pick systems limit a suction payload's acceleration.
-        Timing scales a fixed path's accelerations by 1 / T^2, so T grows by sqrt(peak / rated).
-        Sampled at ACCELERATION_SAMPLES points of the commanded path (the unloaded arm's
-        kinematics). For one joint-space segment (the transport): a path of many IK waypoints is
-        piecewise linear in joint space, and its kinks would read as acceleration spikes the servo
-        never follows (the straight lift's peak is known anyway: 5.77 L / T^2). The servo's
-        residual lag with the load is left to the measurement (`peak_acceleration` of the result)."""
+    def _carry_time(self, waypoints: np.ndarray, length: float) -> float:
+        """Duration of a straight min-jerk move of `length` metres through joint `waypoints`: the
+        shortest under the joints' speed limits (`_duration`), lengthened until the tool tip's
+        peak acceleration, 5.774 L / T^2 on a straight line, stays within the cup's rated
+        `CupConfig.peak_acceleration` (the inertial load the labeller and the mass cap assume), as
+        pick systems limit a suction payload's acceleration. The servo's residual lag with the
+        load is left to the measurement (`peak_acceleration` of the result)."""
         rated = self.scene.cup.cup.peak_acceleration
-        tips = self._tips_at(min_jerk_path(waypoints, np.linspace(0.0, 1.0, ACCELERATION_SAMPLES)))
-        h = duration / (ACCELERATION_SAMPLES - 1)
-        peak = float(np.linalg.norm(tips[2:] - 2.0 * tips[1:-1] + tips[:-2], axis=1).max()) / h**2
-        return duration * math.sqrt(peak / rated) if rated > 0.0 and peak > rated else duration
+        duration = self._duration(waypoints, self.config.transport_min_time)
+        if rated > 0.0:
+            duration = max(duration, math.sqrt(minjerk.PEAK_ACCELERATION * length / rated))
+        return duration
 
     def _duration(self, waypoints: np.ndarray, minimum: float) -> float:
         """Shortest min-jerk duration keeping every joint under its scaled speed limit.
@@ -451,8 +457,7 @@ class PickEpisode:
             standoff = point - c.guarded_standoff * approach
             self._ik(pre, approach, q0)  # unreachable grasps fail before the arm moves
             lift_end = self._lift_end(point)
-            bx, by = self.scene.config.bin_centre
-            above_bin = np.array([bx, by, c.transport_height])
+            above_bin = self._above_bin()
 
             self.watch_collisions = True  # the arm must not touch anything on the way in
             q_pre = self._transit(q0, pre, approach)
@@ -491,13 +496,7 @@ class PickEpisode:
             if not lifted:
                 raise _Failure("not_lifted")
 
-            q_up = d.qpos[self.arm_qpos].copy()
-            q_bin = self._ik(above_bin, np.array([0.0, 0.0, -1.0]), q_up)
-            transport = np.array([q_up, q_bin])
-            self._motion, self._tool_path["transport"] = "transport", []
-            lost = self._follow_holding(transport, self._within_rated_acceleration(
-                transport, self._duration(transport, 0.8)), grip)
-            self._motion = None
+            q_bin, lost = self._carry(d.qpos[self.arm_qpos].copy(), above_bin, approach, grip)
             peak_slip = max(peak_slip, lost[1])
             if lost[0]:
                 raise _Failure("seal_lost_transport")
@@ -566,6 +565,49 @@ class PickEpisode:
         d = self.data
         rot = d.site_xmat[self.tip].reshape(3, 3)
         return rot.T @ (d.xipos[self.object] - d.site_xpos[self.tip])
+
+    def _carry(self, q_up: np.ndarray, above_bin: np.ndarray, approach: np.ndarray,
+               grip: np.ndarray) -> tuple[np.ndarray, tuple[bool, float]]:
+        """The transport: the tool tip on a straight line from where the lift left it to
+        `above_bin`, the tool keeping the grasp's orientation, min-jerk timed within the cup's
+        rated acceleration (`_carry_time`); a linear move, as pick cells carry a suction payload.
+        The held object then feels only the translation's inertial load, the one the cup is rated
+        for and the labeller takes (PerturbationConfig.inertial_acceleration). Returns the arm
+        configuration over the bin and `_follow_holding`'s (seal lost, peak slip).
+
+        Why not a joint-space move to a tool pointing down (the episode's transport before): it
+        turned the tool, and the object with it, in ways no rating bounds: a bottle gripped 39 deg
+        off vertical was swung through vertical to 28 deg on the other side at up to 100 deg/s
+        and 22 rad/s^2, a vertical grip tipped 3.8 deg mid-way, and the tip's curved path
+        overshot the rated acceleration by up to 19 % (agreement study, eval/README.md)."""
+        start = self._tip_at(q_up)
+        path = self._line(start, above_bin, approach, q_up, step=CARRY_STEP)
+        self._motion, self._tool_path["transport"] = "transport", []
+        lost = self._follow_holding(path, self._carry_time(path, float(np.linalg.norm(above_bin - start))), grip)
+        self._motion = None
+        return path[-1], lost
+
+    def _above_bin(self) -> np.ndarray:
+        """Where the transport leaves the tool tip: over the bin's centre at `transport_height`."""
+        bx, by = self.scene.config.bin_centre
+        return np.array([bx, by, self.config.transport_height])
+
+    def planned_transport(self, point: np.ndarray, approach: np.ndarray) -> tuple[np.ndarray, float] | None:
+        """The transport a grasp at world `point` along `approach` will make, planned before the
+        arm moves (`_carry`'s line from the lift's end, `_carry_time`'s duration): its unit world
+        direction and its duration (s), for the episode's labeller (PerturbationConfig
+        .transport_direction). None where the line is out of reach (the episode then fails first)."""
+        point, approach = np.asarray(point, float), np.asarray(approach, float) / np.linalg.norm(approach)
+        start, end = self._lift_end(point), self._above_bin()
+        try:
+            q_up = self._ik(start, approach, self._ready_configuration())
+            path = self._line(start, end, approach, q_up, step=CARRY_STEP)
+        except _Failure:
+            return None
+        length = float(np.linalg.norm(end - start))
+        if length < 1e-9:
+            return None
+        return (end - start) / length, self._carry_time(path, length)
 
     def _follow_holding(self, waypoints: np.ndarray, duration: float, grip: np.ndarray) -> tuple[bool, float]:
         """Follow waypoints with the object held; returns (seal lost, peak slip of the object

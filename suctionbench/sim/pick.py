@@ -12,7 +12,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from suctionbench.config import CUP_DEFAULT, CupConfig, LabelConfig
+from suctionbench.config import CUP_DEFAULT, CupConfig, LabelConfig, PerturbationConfig
 from suctionbench.contact import SuctionLabeller
 from suctionbench.contact.metrics import METRICS
 from suctionbench.errors import InputError
@@ -115,10 +115,16 @@ def _pose(position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
 
 
 def grasp_labels(mesh: Any, com: np.ndarray, mass: float, cup: CupConfig, point: np.ndarray, approach: np.ndarray,
-                 seed: int) -> dict[str, Any]:
+                 seed: int, transport: tuple[np.ndarray, float] | None = None) -> dict[str, Any]:
     """The label fields of a trial record (`NO_LABELS`' keys) for one world grasp on an object
-    whose world mesh, centre of mass and mass are given, labelled for the pick episode's loads."""
-    labeller = SuctionLabeller(mesh, LabelConfig.for_episode(cup), mass=mass, com=com)
+    whose world mesh, centre of mass and mass are given, labelled for the pick episode's loads:
+    with its planned `transport` (world direction, duration: `PickEpisode.planned_transport`)
+    where known, else a transport of unknown direction and length."""
+    extra = {} if transport is None else {
+        "transport_direction": tuple(float(v) for v in transport[0]), "transport_time": float(transport[1]),
+        "transport_time_max": None}
+    config = LabelConfig(cup=cup, perturbation=PerturbationConfig.for_episode(cup, **extra))
+    labeller = SuctionLabeller(mesh, config, mass=mass, com=com)
     labels = labeller.label(np.asarray(point)[None], np.asarray(approach)[None], seed, metrics=tuple(METRICS))
     return {
         "label_seal": bool(labels.seal.seal[0]),
@@ -257,7 +263,8 @@ class PickRunner:
         The disturbing wrench includes the inertial load of the episode's peak acceleration."""
         if mesh is None:
             mesh, com = self.posed_object()
-        return grasp_labels(mesh, com, self.record.mass, self.request.cup, point, approach, self.request.seed)
+        return grasp_labels(mesh, com, self.record.mass, self.request.cup, point, approach, self.request.seed,
+                            self.episode.planned_transport(point, approach))
 
     def observe(self) -> Any:
         """The policy's view: the overhead depth image (with sensor noise), the camera, and the

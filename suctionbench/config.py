@@ -417,6 +417,12 @@ class PerturbationConfig:
     own side of the swing's response (contact/arrival.py), over the planned `transport_time`.
     None: unknown (a dataset's labels), azimuths drawn per sample."""
 
+    transport_length: float | None = None
+    """Length (m) of the planned transport's straight line, with `transport_direction`: a min-jerk
+    move of L metres over T = transport_time peaks at 5.774 L / T^2, the transport's inertial load
+    (at most inertial_acceleration, the cup's rating, which only the shortest transports reach:
+    the joints' speed limits set 90 % of them longer). None: the rated peak."""
+
     press_compression: float = 0.0
     """Compression (m) of the bellows at which the pick's touch-down stops and holds while the
     seal forms (the episode's EpisodeConfig.compression_stop). The object must stay put under the
@@ -454,7 +460,7 @@ class PerturbationConfig:
                              f">= transport_time = {self.transport_time!r}")
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
-            if f.name in ("transport_time_max", "transport_direction") and value is None:
+            if f.name in ("transport_time_max", "transport_direction", "transport_length") and value is None:
                 continue
             if f.name == "transport_direction":
                 if len(value) != 3 or not all(math.isfinite(v) for v in value) or not any(value):

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ndtr, ndtri
 
+from suctionbench import minjerk
 from suctionbench.config import CupConfig, PerturbationConfig
 from suctionbench.contact.arrival import Arrival
 from suctionbench.contact.press import Footprint, stays_put
@@ -158,7 +159,10 @@ def planned_forces(mass: float, gravity: np.ndarray, config: PerturbationConfig)
     along = along / np.linalg.norm(along)
     gravity = np.asarray(gravity, dtype=float)
     down = gravity / max(float(np.linalg.norm(gravity)), 1e-12)
-    push = mass * config.inertial_acceleration * along
+    peak = config.inertial_acceleration
+    if config.transport_length is not None:  # the planned line's own peak, 5.774 L / T^2
+        peak = min(peak, minjerk.PEAK_ACCELERATION * config.transport_length / config.transport_time**2)
+    push = mass * peak * along
     return np.stack([mass * config.lift_acceleration * down, -push, push])
 
 

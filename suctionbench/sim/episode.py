@@ -602,11 +602,12 @@ class PickEpisode:
         bx, by = self.scene.config.bin_centre
         return np.array([bx, by, self.config.transport_height])
 
-    def planned_transport(self, point: np.ndarray, approach: np.ndarray) -> tuple[np.ndarray, float] | None:
+    def planned_transport(self, point: np.ndarray, approach: np.ndarray) -> tuple[np.ndarray, float, float] | None:
         """The transport a grasp at world `point` along `approach` will make, planned before the
         arm moves (`_carry`'s line from the lift's end, `_carry_time`'s duration): its unit world
-        direction and its duration (s), for the episode's labeller (PerturbationConfig
-        .transport_direction). None where the line is out of reach (the episode then fails first)."""
+        direction, its duration (s) and its length (m), for the episode's labeller
+        (PerturbationConfig.transport_direction, transport_time, transport_length); `_carry` runs it
+        for that duration. None where the line is out of reach (the episode then fails first)."""
         point, approach = np.asarray(point, float), np.asarray(approach, float) / np.linalg.norm(approach)
         start, end = self._lift_end(point), self._above_bin()
         try:
@@ -617,7 +618,7 @@ class PickEpisode:
         length = float(np.linalg.norm(end - start))
         if length < 1e-9:
             return None
-        return (end - start) / length, self._carry_time(path, length)
+        return (end - start) / length, self._carry_time(path, length), length
 
     def _follow_holding(self, waypoints: np.ndarray, duration: float, grip: np.ndarray) -> tuple[bool, float]:
         """Follow waypoints with the object held; returns (seal lost, peak slip of the object

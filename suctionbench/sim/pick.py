@@ -122,6 +122,7 @@ def grasp_labels(mesh: Any, com: np.ndarray, mass: float, cup: CupConfig, point:
     where known, else a transport of unknown direction and length."""
     extra = {} if transport is None else {
         "transport_direction": tuple(float(v) for v in transport[0]), "transport_time": float(transport[1]),
+        "transport_length": float(transport[2]),
         "transport_time_max": None}
     config = LabelConfig(cup=cup, perturbation=PerturbationConfig.for_episode(cup, **extra))
     labeller = SuctionLabeller(mesh, config, mass=mass, com=com)

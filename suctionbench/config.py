@@ -417,6 +417,11 @@ class PerturbationConfig:
     own side of the swing's response (contact/arrival.py), over the planned `transport_time`.
     None: unknown (a dataset's labels), azimuths drawn per sample."""
 
+    hold_time: float = 0.5
+    """How long (s) the pick holds the object over the bin after the transport (the episode's
+    EpisodeConfig.hold_time): the planned swing (`transport_direction`) is followed through it,
+    where a braking's overshoot may still peak."""
+
     transport_length: float | None = None
     """Length (m) of the planned transport's straight line, with `transport_direction`: a min-jerk
     move of L metres over T = transport_time peaks at 5.774 L / T^2, the transport's inertial load
@@ -434,6 +439,14 @@ class PerturbationConfig:
     touch-down's press: the scene's table (SceneConfig.friction; MuJoCo takes the larger of two
     surfaces' coefficients, and the objects' own, against silicone, are at most 0.5). Dry
     cardboard, paper or plastic on wood or laminate: 0.3-0.6."""
+
+    @property
+    def transport_peak(self) -> float:
+        """Peak acceleration (m/s^2) of the transport: the planned line's 5.774 L / T^2 where its
+        length is known (`transport_length`), at most the rated inertial_acceleration."""
+        if self.transport_length is None:
+            return self.inertial_acceleration
+        return min(self.inertial_acceleration, minjerk.PEAK_ACCELERATION * self.transport_length / self.transport_time**2)
 
     @property
     def lift_acceleration(self) -> float:

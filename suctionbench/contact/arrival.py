@@ -86,32 +86,28 @@ def _response_table(zeta: float) -> np.ndarray:
     """Peak response (in units of the static response to the peak acceleration) of
     x'' + 2 zeta w x' + w^2 x = w^2 a(t) / a_max, w = 2 pi / T_n, a the min-jerk acceleration over
     T = ratio T_n (then 0 for RESIDUAL_PERIODS more periods), from rest, for each ratio of
-    DAF_RATIOS, and the deepest swing the other way (the braking's, as a positive number). Time in
-    natural periods; semi-implicit Euler, each ratio with its own step: 200 per period and per
-    motion, the same number of steps for all (vectorised)."""
+    DAF_RATIOS. Time in natural periods; semi-implicit Euler, each ratio with its own step: 200 per
+    period and per motion, the same number of steps for all (vectorised)."""
     w = 2.0 * math.pi
     span = DAF_RATIOS + RESIDUAL_PERIODS
     dt = np.minimum(1.0, DAF_RATIOS) / 200.0
     steps = int(np.ceil((span / dt).max()))
     dt = span / steps
-    x, v, peak, trough = np.zeros_like(dt), np.zeros_like(dt), np.zeros_like(dt), np.zeros_like(dt)
+    x, v, peak = np.zeros_like(dt), np.zeros_like(dt), np.zeros_like(dt)
     for k in range(steps):
         u = np.minimum(k * dt / DAF_RATIOS, 1.0)
         drive = minjerk.acceleration(u) / minjerk.PEAK_ACCELERATION  # 0 from u = 1 on
         v += dt * (w * w * (drive - x) - 2.0 * zeta * w * v)
         x += dt * v
         np.maximum(peak, x, out=peak)
-        np.minimum(trough, x, out=trough)
-    return peak, -trough
+    return peak
 
 
-def response_factor(ratio: np.ndarray, zeta: float, braking: bool = False) -> np.ndarray:
+def response_factor(ratio: np.ndarray, zeta: float) -> np.ndarray:
     """DAF: the peak swing under the transport's min-jerk acceleration over the static swing at its
     peak, for motion time / natural period `ratio` (interpolated in log ratio; beyond the table,
-    its end values: ~1 for slow motions, ~0 for a swing too slow to follow). `braking`: the
-    deepest swing the other way, the braking's, in the same units (a load case along the
-    transport's direction: `Arrival.braking`)."""
-    table = _response_table(round(float(zeta), 12))[1 if braking else 0]
+    its end values: ~1 for slow motions, ~0 for a swing too slow to follow)."""
+    table = _response_table(round(float(zeta), 12))
     return np.interp(np.log(np.maximum(ratio, 1e-12)), np.log(DAF_RATIOS), table)
 
 
@@ -169,11 +165,18 @@ class Arrival:
     zeta: float
     """Damping ratio of the swing (the silicone's loss factor / 2)."""
 
-    braking: bool = False
-    """The transport case is the braking's (its inertial force along the transport's known
-    direction): its swing peaks at the response's deepest swing the other way
-    (`response_factor(..., braking=True)`). False: the starting push's (an azimuth drawn at
-    random, or against the known direction)."""
+    planned: bool = False
+    """The pick's motion is known (the transport's direction, time and length: PerturbationConfig
+    .transport_direction): the swing is followed in time through the lift, the transport and the
+    hold (contact/swing_path.py), and each load case stands for one phase's worst instant
+    (swing_path.PHASES), the transport case's force -m a giving the transport's direction. False:
+    the closed form's turning points, one per load case."""
+
+    transport_peak: float = 0.0
+    """Peak acceleration (m/s^2) of the planned transport (`planned`): 5.774 L / T^2."""
+
+    hold_time: float = 0.0
+    """How long (s) the planned pick holds the object over the bin after the transport (`planned`)."""
 
     def take(self, rows: np.ndarray | slice) -> Arrival:
         """The rows `rows` only."""

@@ -14,7 +14,7 @@ from suctionbench.contact.metrics import METRICS, GraspLabels
 from suctionbench.contact.press import Footprint, stays_put
 from suctionbench.contact.robust import ObjectState, arrivals, inertial_forces, planned_forces, robust_wrench_resistance
 from suctionbench.contact.seal import PUSHED_AWAY, SealModel, SealResult
-from suctionbench.contact.wrench import lip_load, resists
+from suctionbench.contact.wrench import lip_loads, resists
 from suctionbench.errors import InputError
 from suctionbench.geometry.frames import approach_frames
 from suctionbench.geometry.mesh import MeshInfo, validate_mesh
@@ -114,25 +114,25 @@ class SuctionLabeller:
         return ok
 
     def nominal_lip_loads(self, frames: np.ndarray, seal: SealResult) -> list[np.ndarray]:
-        """The wrench (N, 6) the lip carries in each nominal load case (`lip_load`, at the swing's
-        turning point): the weight alone, or with an inertial load the lift and the transport at
-        each of NOMINAL_TRANSPORT_AZIMUTHS (its start and its braking where its direction is
-        known), for grasps of contact `frames` (N, 3, 3) and their `seal`."""
+        """The wrench (N, 6) the lip carries in each nominal load case (`lip_loads`): the weight
+        alone, or with an inertial load the lift and the transport at each of
+        NOMINAL_TRANSPORT_AZIMUTHS (at the swing's turning points), or, where the pick's motion is
+        planned, the lift's and the carry's worst instants of the swing followed in time; for
+        grasps of contact `frames` (N, 3, 3) and their `seal`."""
         count = len(frames)
         weight = np.broadcast_to(self.object.gravity_force, (count, 3))
         inertial = np.zeros((count, 1, 3))
         motion = self.config.perturbation
         if motion.inertial_acceleration > 0.0 and motion.transport_direction is not None:
-            inertial = np.broadcast_to(planned_forces(self.object.mass, self.object.gravity, motion), (count, 3, 3))
+            inertial = np.broadcast_to(planned_forces(self.object.mass, self.object.gravity, motion), (count, 2, 3))
         elif motion.inertial_acceleration > 0.0:
             azimuths = np.broadcast_to(NOMINAL_TRANSPORT_AZIMUTHS, (count, len(NOMINAL_TRANSPORT_AZIMUTHS)))
             inertial = inertial_forces(self.object.mass, self.object.gravity, motion.inertial_acceleration, frames,
                                        azimuths, motion.lift_acceleration)
         com = np.broadcast_to(self.object.com, (count, 3))
         cases = arrivals(self.object, motion, self.config.cup, weight, inertial)
-        return [lip_load(weight + inertial[:, case], com, seal.ring_centre, frames, self.config.cup,
-                         None if cases is None else cases[case])
-                for case in range(inertial.shape[1])]
+        loads = lip_loads(weight[:, None] + inertial, com, seal.ring_centre, frames, self.config.cup, cases)
+        return list(loads.transpose(1, 0, 2))
 
     def robust(
         self,

@@ -33,12 +33,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ndtr, ndtri
 
-from suctionbench import minjerk
 from suctionbench.config import CupConfig, PerturbationConfig
 from suctionbench.contact.arrival import Arrival
 from suctionbench.contact.press import Footprint, stays_put
 from suctionbench.contact.seal import SealModel
-from suctionbench.contact.wrench import lip_load, resists, resists_qp
+from suctionbench.contact.wrench import lip_loads, resists, resists_qp
 from suctionbench.geometry.frames import so3_exp
 
 CHUNK_SAMPLES = 8192
@@ -120,11 +119,12 @@ def arrivals(obj: ObjectState, config: PerturbationConfig, cup: CupConfig, weigh
     if obj.inertia is None or obj.support is None:
         return None
     duration = config.transport_time if transport_time is None else transport_time
+    planned = config.transport_direction is not None and inertial.shape[1] == 2
     return [
-        Arrival(weight, None if case == 0 else inertial[:, case], np.asarray(obj.inertia, dtype=float), obj.mass,
-                np.asarray(obj.support, dtype=float), config.lift_height, config.lift_time,
-                duration, cup.axial_stiffness, cup.swing_damping_ratio,
-                braking=case == 2 and config.transport_direction is not None)
+        Arrival(weight, inertial[:, 1] if planned else (None if case == 0 else inertial[:, case]),
+                np.asarray(obj.inertia, dtype=float), obj.mass, np.asarray(obj.support, dtype=float),
+                config.lift_height, config.lift_time, duration, cup.axial_stiffness, cup.swing_damping_ratio,
+                planned=planned, transport_peak=config.transport_peak, hold_time=config.hold_time)
         for case in range(max(inertial.shape[1], 1))
     ]
 
@@ -152,18 +152,15 @@ def inertial_forces(
 
 
 def planned_forces(mass: float, gravity: np.ndarray, config: PerturbationConfig) -> np.ndarray:
-    """(3, 3) inertial forces -m a_cup of a pick whose transport's direction d is known
-    (config.transport_direction, mesh frame): the lift (m a_lift along gravity), the transport's
-    start (-m a d: the object pushed back as the cup sets off) and its braking (+m a d)."""
+    """(2, 3) inertial forces -m a_cup at the peaks of a pick whose transport's direction d is
+    known (config.transport_direction, mesh frame): the lift (m a_lift along gravity) and the
+    transport (-m a_p d, the object pushed back as the cup sets off). The planned swing
+    (contact/swing_path.py) takes the transport's direction from it and follows its braking too."""
     along = np.asarray(config.transport_direction, dtype=float)
     along = along / np.linalg.norm(along)
     gravity = np.asarray(gravity, dtype=float)
     down = gravity / max(float(np.linalg.norm(gravity)), 1e-12)
-    peak = config.inertial_acceleration
-    if config.transport_length is not None:  # the planned line's own peak, 5.774 L / T^2
-        peak = min(peak, minjerk.PEAK_ACCELERATION * config.transport_length / config.transport_time**2)
-    push = mass * peak * along
-    return np.stack([mass * config.lift_acceleration * down, -push, push])
+    return np.stack([mass * config.lift_acceleration * down, -(mass * config.transport_peak) * along])
 
 
 def truncated_normal(u: np.ndarray, mean: float, std: float, low: float, high: float) -> np.ndarray:
@@ -224,9 +221,9 @@ def sample_perturbations(
     mu = truncated_normal(
         noise[:, :, 18], cup.friction, config.friction_std, config.friction_min, config.friction_max
     )
-    if known:  # (N, J, 3, 3): the lift, the start's push and the braking along the planned line
-        cases = np.broadcast_to(planned_forces(obj.mass, obj.gravity, config), (count, j, 3, 3))
-        extra = np.einsum("nsij,nskj->nski", inv, cases).reshape(-1, 3, 3)
+    if known:  # (N, J, 2, 3): the lift and the transport along the planned line, in the perturbed frame
+        cases = np.broadcast_to(planned_forces(obj.mass, obj.gravity, config), (count, j, 2, 3))
+        extra = np.einsum("nsij,nskj->nski", inv, cases).reshape(-1, 2, 3)
     elif inertial:  # (N, J, 2, 3): lift and transport, rotated into the perturbed object frame
         cases = inertial_forces(obj.mass, obj.gravity, config.inertial_acceleration, frames, azimuth,
                                 config.lift_acceleration)
@@ -273,9 +270,8 @@ def _wrench_gate(loads: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.
     ) -> np.ndarray:
         new = ~known[idx]
         todo, at = idx[new], centres[new]
-        for case in range(loads.shape[1]):
-            arrival = None if cases is None else cases[case].take(todo)
-            wrenches[todo, case] = lip_load(loads[todo, case], com[todo], at, frames[todo], cup, arrival)
+        wrenches[todo] = lip_loads(loads[todo], com[todo], at, frames[todo], cup,
+                                   None if cases is None else [case.take(todo) for case in cases])
         known[todo] = True
         ok = np.ones(len(idx), dtype=bool)
         for case in range(loads.shape[1]):
@@ -296,11 +292,8 @@ def evaluate_samples_reference(seal: SealModel, samples: GraspSamples, cases: li
         if not result.seal[0]:
             continue
         centre, frame = result.ring_centre[0], samples.frames[i]
-        wrenches = np.concatenate([
-            lip_load(loads[i, case][None], samples.com[i][None], centre[None], frame[None], seal.cup,
-                     None if cases is None else cases[case].take(slice(i, i + 1)))
-            for case in range(loads.shape[1])
-        ])
+        wrenches = lip_loads(loads[i : i + 1], samples.com[i][None], centre[None], frame[None], seal.cup,
+                             None if cases is None else [case.take(slice(i, i + 1)) for case in cases])[0]
         out[i] = all(
             resists_qp(
                 None, None, centre, frame, float(samples.friction[i]),

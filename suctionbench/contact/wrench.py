@@ -75,6 +75,7 @@ import scipy.sparse as sp
 
 from suctionbench.config import CupConfig
 from suctionbench.contact.arrival import Arrival, quarter_swing_share, response_factor
+from suctionbench.contact.swing_path import swing_through
 
 SQRT2, SQRT3 = math.sqrt(2.0), math.sqrt(3.0)
 
@@ -220,11 +221,14 @@ class _Swing:
         c, s = np.cos(phi)[:, None], np.sin(phi)[:, None]
         return self.f * c - np.cross(self.n, self.f) * s + self.n * self.n_f[:, None] * (1.0 - c)
 
+    def cup_rate(self, phi: np.ndarray) -> np.ndarray:
+        """The cup's return rate dR / dphi at phi: k_s below the stop, k_c beyond."""
+        return np.where(phi <= self.phi_stop, self.k_series, self.k_caught)
+
     def stiffness(self, phi: np.ndarray) -> np.ndarray:
-        """The swing's stiffness at phi, -d moment / d phi: the cup's return rate (k_s below the
-        stop, k_c beyond) plus the pendulum's A sin(phi) + B cos(phi)."""
-        rate = np.where(phi <= self.phi_stop, self.k_series, self.k_caught)
-        return rate + self.a * np.sin(phi) + self.b * np.cos(phi)
+        """The swing's stiffness at phi, -d moment / d phi: the cup's return rate (`cup_rate`)
+        plus the pendulum's A sin(phi) + B cos(phi)."""
+        return self.cup_rate(phi) + self.a * np.sin(phi) + self.b * np.cos(phi)
 
     def static_tilt(self) -> np.ndarray:
         """Equilibrium tilt: moment(phi) = 0 on [0, SWING_CAP] (SWING_CAP if none)."""
@@ -317,6 +321,21 @@ def lip_load(
     return np.concatenate([f - spin * arm, torque - spin * np.cross(swing.r, arm) - alpha * own], axis=1)
 
 
+def lip_loads(
+    loads: np.ndarray, com: np.ndarray, ring_centre: np.ndarray, frames: np.ndarray, cup: CupConfig,
+    cases: list[Arrival] | None = None,
+) -> np.ndarray:
+    """(N, L, 6) the wrench the lip carries in each of the L load cases `loads` (N, L, 3) at `com`
+    (`lip_load`, with each case's arrival `cases[l]`, None for the step bound). Where the pick's
+    motion is planned (`Arrival.planned`) the swing is followed in time once for all cases
+    (contact/swing_path.py: the lift's worst instant, then the carry's)."""
+    if cases is not None and cases[0].planned and cup.bellows_swing and cup.swing_overshoot:
+        swing = _Swing(cases[0].weight, com, ring_centre, frames, cup)
+        return swing_through(swing, cases[-1], np.broadcast_to(com, swing.f.shape), ring_centre, frames, cup)
+    return np.stack([lip_load(loads[:, case], com, ring_centre, frames, cup, None if cases is None else cases[case])
+                     for case in range(loads.shape[1])], axis=1)
+
+
 def _turning_tilt(energy, phi_s: np.ndarray) -> np.ndarray:
     """Where the swing's kinetic energy `energy(phi)` (positive at phi_s, falling beyond it) runs
     out on [phi_s, SWING_CAP] (SWING_CAP if it never does)."""
@@ -350,7 +369,7 @@ def _arrived_tilt(swing: _Swing, phi_s: np.ndarray, arrival: Arrival, com: np.nd
     rest = swing.work(still)
     step = _turning_tilt(lambda p: swing.work(p) - rest, phi_s)  # the step's turning point from phi_0
     period = 2.0 * np.pi * np.sqrt(inertia / np.maximum(swing.stiffness(phi_s), 1e-12))
-    factor = response_factor(arrival.transport_time / np.maximum(period, 1e-12), arrival.zeta, arrival.braking)
+    factor = response_factor(arrival.transport_time / np.maximum(period, 1e-12), arrival.zeta)
     carried = np.where(still < phi_s, phi_s + (factor - 1.0) * (step - phi_s), phi_s)
     hanging = _Swing(arrival.weight, com, ring_centre, frames, cup)
     hang = hanging.static_tilt()

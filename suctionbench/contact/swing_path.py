@@ -1,0 +1,160 @@
+"""The swing followed in time through a planned pick: the lift, the transport and the hold.
+
+Where the pick's motion is known when labelling (the episode's labeller: `PerturbationConfig
+.transport_direction`, with its planned time and length), the swinging cup's load need not be
+bounded by turning points (contact/arrival.py's closed form, which takes the lift's ringing in its
+worst phase and scales a step's overshoot by the response factor of a linear swing): the same
+one-body swing is integrated in time, and the lip judged at its worst instant of each phase.
+
+The model (contact frame, which the straight lift and transport do not turn). The object is a
+rigid body hinged at the lip centre, tilted by the in-plane rotation vector phi (|phi| the tilt,
+phi / |phi| its axis); the cup returns R(|phi|) about that axis (`wrench._Swing.returned`: bellows
+and lip in series, the stop beyond theta_max); the silicone loses 2 zeta sqrt(k I) per rad/s
+(zeta = cup.swing_damping_ratio, k and I the hanging swing's stiffness and moment of inertia); the
+load is m (g - a(t)) at the centre of mass, a(t) the tool's min-jerk acceleration:
+
+    lift       a = up (H / T_l^2) s''(t / T_l),                         0 <= t < T_l
+    transport  a = d a_p s''((t - T_l) / T) / max s'',                  T_l <= t < T_l + T
+    hold       a = 0,                                                   up to T_l + T + T_h
+
+(a_p = 5.774 L / T^2, at most the cup's rating). Euler's equation about the lip centre for the
+in-plane rate omega, the object's inertia about the lip centre I_L (parallel axes) restricted to
+the cup plane, twisting held by the bellows' torsional stiffness:
+
+    I_L omega' = (r x m (g - a))_xy - R(|phi|) phi / |phi| - c omega,   phi' = omega,
+
+r the centre of mass turned by phi. It starts at the lift-off (contact/arrival.py: the object
+leaves the table at the weight's static tilt phi_s, turning at the pivot's rate psi', at the time
+t_off into the lift) and is stepped with the cup's return and the loss implicit (linearised about
+the step's start: stable where the stop's 0.14 N m/rad meets a light object's small inertia) and
+the load explicit (its pendulum rate sqrt(g / h) stays below 0.1 / dt for h >= 4 mm).
+
+The lip carries, at each instant, the cup's return and the loss about the tilt axis, the load's
+twist, and the load less what accelerates the centre of mass (Newton: m (alpha x r + omega x
+(omega x r))), all seen from the tilted object; its ring limit r (V - f_z) / 2 with f_z that
+force's pull. The lip is judged (`wrench.resists`) at each phase's instant of the highest moment
+over that limit (at the cup's full vacuum): the lift (to T_l) and the carry (transport and hold).
+
+Left out: the tool's servo lag (the simulated tool runs 5-15 % past its planned peak), the axial
+bounce of the bellows, a twist of the tilt axis by the object's own spin (gyroscopic terms).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from suctionbench import minjerk
+from suctionbench.config import CupConfig
+
+STEP = 0.002
+"""Time step (s): 100+ per swing period of the basic objects (0.2-0.65 s); the stop's stiffer
+swing of a light object is stepped implicitly."""
+
+PHASES = ("lift", "carry")
+"""The phases whose worst instants the lip is judged at: the lift, then the transport and the hold."""
+
+
+def _rotate(phi: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """v (N, 3) turned by the in-plane rotation vectors phi (N, 2) (Rodrigues)."""
+    angle = np.hypot(phi[:, 0], phi[:, 1])
+    axis = np.zeros_like(v)
+    safe = np.maximum(angle, 1e-15)
+    axis[:, 0], axis[:, 1] = phi[:, 0] / safe, phi[:, 1] / safe
+    c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
+    along = np.einsum("ni,ni->n", axis, v)[:, None]
+    return v * c + np.cross(axis, v) * s + axis * along * (1.0 - c)
+
+
+def _damping(swing, phi_s: np.ndarray, about_lip: np.ndarray, zeta: float) -> np.ndarray:
+    """(N,) the silicone's loss c = 2 zeta sqrt(k I) (N m s/rad) of the hanging swing: k its
+    stiffness at the weight's static tilt (`_Swing.stiffness`), I the moment of inertia about its
+    axis through the lip centre (a load with no tilting moment: the mean of the in-plane ones)."""
+    axis = swing.n
+    along = np.einsum("ni,nij,nj->n", axis, about_lip, axis)
+    inertia = np.where(swing.tips, along, 0.5 * (about_lip[:, 0, 0] + about_lip[:, 1, 1]))
+    return 2.0 * zeta * np.sqrt(np.maximum(swing.stiffness(phi_s), 0.0) * inertia)
+
+
+def _solve(plane: np.ndarray, extra: np.ndarray, drive: np.ndarray) -> np.ndarray:
+    """(N, 2) x solving (plane + extra E) x = drive for (N, 2, 2) `plane`, (N,) `extra` (closed-form
+    2 x 2 inverse: one batched LAPACK call per step costs more than the step)."""
+    a, b = plane[:, 0, 0] + extra, plane[:, 0, 1]
+    c, d = plane[:, 1, 0], plane[:, 1, 1] + extra
+    det = a * d - b * c
+    return np.column_stack([(d * drive[:, 0] - b * drive[:, 1]) / det, (a * drive[:, 1] - c * drive[:, 0]) / det])
+
+
+def swing_through(swing, arrival, com: np.ndarray, ring_centre: np.ndarray, frames: np.ndarray,
+                  cup: CupConfig) -> np.ndarray:
+    """(N, 2, 6) the wrench the lip carries (contact frame, as `wrench.resists` takes it) at the
+    worst instant of the lift and of the carry (module docstring), for the swing of the object's
+    weight alone `swing` (`wrench._Swing`: its static tilt and axis start the lift-off) and the
+    planned motion `arrival` (`Arrival` with `planned` set: its transport force gives the
+    direction, its transport_time, transport_peak and hold_time the timing)."""
+    count = len(frames)
+    if count == 0:
+        return np.zeros((0, 2, 6))
+    mass = arrival.mass
+    gravity = np.einsum("nji,nj->ni", frames, arrival.weight) / mass  # g in the contact frame
+    up = -gravity / np.maximum(np.linalg.norm(gravity, axis=1), 1e-12)[:, None]
+    push = np.einsum("nji,nj->ni", frames, -arrival.transport_force)  # -(-m a): along the tool's acceleration
+    ahead = push / np.maximum(np.linalg.norm(push, axis=1), 1e-12)[:, None]
+    arm0 = np.einsum("nji,nj->ni", frames, com - ring_centre)
+    own = np.einsum("nji,jk,nkl->nil", frames, arrival.inertia, frames)
+    about_lip = own + mass * (np.einsum("ni,ni->n", arm0, arm0)[:, None, None] * np.eye(3)
+                              - np.einsum("ni,nj->nij", arm0, arm0))
+    plane = about_lip[:, :2, :2]
+    phi_s = swing.static_tilt()
+    rate, t_off = arrival.lift_off(swing.n, phi_s, ring_centre, com, frames)
+    phi = phi_s[:, None] * swing.n[:, :2]
+    omega = rate[:, None] * swing.n[:, :2]
+    loss = _damping(swing, phi_s, about_lip, arrival.zeta)
+
+    lift_time, lift_rate = arrival.lift_time, arrival.lift_height / arrival.lift_time**2
+    duration = np.broadcast_to(np.asarray(arrival.transport_time, dtype=float), (count,))
+    peak = arrival.transport_peak / minjerk.PEAK_ACCELERATION
+    end = lift_time + duration + arrival.hold_time
+    best = np.full((count, 2), -np.inf)
+    out = np.zeros((count, 2, 6))
+    limit_scale = 0.5 * cup.radius
+    vacuum = cup.vacuum_force
+    t = float(np.min(t_off))
+    while t < float(end.max()):
+        active = (t >= t_off) & (t < end)
+        if t < lift_time:
+            accel = up * (lift_rate * minjerk.acceleration(t / lift_time))
+            phase = 0
+        else:
+            u = np.clip((t - lift_time) / duration, 0.0, 1.0)
+            accel = ahead * (peak * minjerk.acceleration(u))[:, None]
+            phase = 1
+        load = mass * (gravity - accel)
+        arm = _rotate(phi, arm0)
+        moment = np.cross(arm, load)[:, :2]
+        tilt = np.hypot(phi[:, 0], phi[:, 1])
+        axis = phi / np.maximum(tilt, 1e-15)[:, None]
+        returned = swing.returned(tilt)
+        stiffness = swing.cup_rate(tilt)
+        drive = np.einsum("nij,nj->ni", plane, omega) + STEP * (moment - returned[:, None] * axis)
+        new = _solve(plane, STEP * loss + STEP * STEP * stiffness, drive)
+        alpha = np.where(active[:, None], (new - omega) / STEP, 0.0)
+        omega = np.where(active[:, None], new, omega)
+        phi = phi + STEP * np.where(active[:, None], omega, 0.0)
+
+        spin = np.zeros((count, 3))
+        spin[:, :2] = omega
+        turn = np.zeros((count, 3))
+        turn[:, :2] = alpha
+        centre = np.cross(turn, arm) + np.cross(spin, np.cross(spin, arm))
+        back = -phi  # seen from the object: turned back by the tilt
+        force = _rotate(back, load - mass * centre)
+        twist = np.cross(arm0, _rotate(back, load))[:, 2]
+        lip = returned[:, None] * axis + loss[:, None] * omega
+        ratio = np.hypot(lip[:, 0], lip[:, 1]) / (limit_scale * np.maximum(vacuum - force[:, 2], 1e-9))
+        worse = active & (ratio > best[:, phase])
+        best[worse, phase] = ratio[worse]
+        out[worse, phase] = np.column_stack([force, lip, twist])[worse]
+        t += STEP
+    never = ~np.isfinite(best)  # a phase the swing never reached (no lift left after the lift-off)
+    out[never] = 0.0
+    return out

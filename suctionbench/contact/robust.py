@@ -17,12 +17,17 @@ the lift (a_cup straight up at the lift's own peak, PerturbationConfig.lift_acce
 the object hangs with m (g + a_lift)) and the transport (a_cup
 horizontal, direction unknown when labelling: its azimuth round the vertical is drawn uniformly per
 sample from the grasp's keyed stream, after the paper's 19 draws so that a = 0 reproduces the
-paper's labels bit for bit; its duration likewise, from the episode's range, after the azimuth). A sample resists iff it resists every load case. The static weight
+paper's labels bit for bit; its duration likewise, from the episode's range, after the azimuth).
+A sample resists iff it resists every load case. The static weight
 needs no case of its own: it lies on the segment between the zero wrench and the lift case, and
 the set of resisted wrenches is convex. The azimuth is measured from the nominal contact frame's x
 axis projected on the horizontal, so labels stay invariant under rigid motions. How each load
 reaches the swinging cup (the lift-off, the transport's rising acceleration) follows from the
-object's inertia and support (`ObjectState`) and the pick's motion: contact/arrival.py.
+object's inertia and support (`ObjectState`) and the pick's motion: contact/arrival.py. Where the
+pick's motion is planned when labelling (the episode's labeller, PerturbationConfig
+.transport_direction), the transport has the plan's direction, time and peak, and the swing is
+followed in time through the lift, the transport and the hold (contact/swing_path.py): two load
+cases, the lift's and the carry's worst instants.
 """
 
 from __future__ import annotations

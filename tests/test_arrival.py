@@ -170,6 +170,7 @@ def test_labeller_motion_is_the_episodes():
     assert labels.lift_height == episode.lift_height
     assert labels.lift_time == pytest.approx(episode.lift_height / episode.lift_speed)
     assert labels.lift_acceleration == pytest.approx(10 / math.sqrt(3) * 0.15, rel=1e-12)
+    assert labels.hold_time == episode.hold_time  # the planned swing is followed through the hold
 
 
 def test_lip_wrench_at_the_bars_turning_point_is_newton_euler_with_its_inertia():

@@ -446,7 +446,8 @@ class PerturbationConfig:
         length is known (`transport_length`), at most the rated inertial_acceleration."""
         if self.transport_length is None:
             return self.inertial_acceleration
-        return min(self.inertial_acceleration, minjerk.PEAK_ACCELERATION * self.transport_length / self.transport_time**2)
+        planned = minjerk.PEAK_ACCELERATION * self.transport_length / self.transport_time**2
+        return min(self.inertial_acceleration, planned)
 
     @property
     def lift_acceleration(self) -> float:

@@ -165,8 +165,9 @@ def test_long_bar_drops_when_gripped_far_from_its_centre_of_mass():
 
 def centred_grasp(record, step=0.002):
     """Straight-down grasp (object frame) on the object's upper surface nearest, horizontally, to
-    its centre of mass among those the lip seals on, in its most probable stable pose; with the
-    episode's labeller (inertial load on) that judged it."""
+    its centre of mass among those the lip seals on, in its most probable stable pose; with its
+    robust label for a pick of unknown transport (the episode's loads at the rated acceleration, in
+    a random direction, as a dataset labels it)."""
     from suctionbench.config import LabelConfig
     from suctionbench.contact import SuctionLabeller
 
@@ -193,16 +194,19 @@ def centred_grasp(record, step=0.002):
 def test_heaviest_object_of_each_set_with_a_centred_grasp(name):
     # The mass cap V / (S (g + a)) = 0.411 kg leaves every object's weight and lift load inside the
     # vacuum with the safety factor; whether the heaviest object of a set is then carried depends
-    # on where it can be gripped. Both models must give the same verdict for a grasp straight down
-    # at the sealable point nearest above the centre of mass:
+    # on where it can be gripped and how it is carried. Both models must give the same verdict for
+    # a grasp straight down at the sealable point nearest above the centre of mass:
     # - basic, box_cube (0.367 kg, 8 cm): a flat face over the centre of mass. Lift: m (g + a) =
     #   4.74 N < V = 7.96 N. Transport: on a rigid cup m a h = 0.367 x 3.1 x 0.04 = 45 mN m would peel
-    #   the lip (r (V - m g) / 2 = 16 mN m); the bellows swings the cube towards hanging along g - a
-    #   (static tilt 14.9 deg). The transport's acceleration rises in ~0.2 s, less than the swing's
-    #   0.47 s period, so the swing overshoots past the bellows' 21.8 deg stop, where the squeezed
-    #   wall and the lip catch it (`lip_load`); the catch asks more of the lip than its ring holds in
-    #   most transport directions and perturbations: rwr < 0.5. The simulated cube is lifted and
-    #   lost in the transport at the rated 3.1 m/s^2 (carried 10 % slower): the same verdict.
+    #   the lip (r (V - m g) / 2 = 16 mN m); the bellows swings the cube towards hanging along g - a,
+    #   the pendulum's m g h = 0.144 N m/rad beside the cup's 0.028: static tilt atan(a / g) x
+    #   0.144 / 0.172, 14.9 deg at the rated 3.1 m/s^2. Carried in an unknown direction at the
+    #   rated acceleration (a dataset's label) the swing's overshoot (period 0.47 s, the
+    #   acceleration rising in ~0.2 s) reaches the stop, 24.9 deg for the object, where the squeezed
+    #   wall and the lip catch it and peel it in most perturbations: rwr <= 0.5. The episode plans
+    #   its transport first: 0.32 m in 0.84 s (the joints' speed limits), peak 5.774 L / T^2 =
+    #   2.6 m/s^2, static tilt 12.5 deg; its labeller follows that swing in time and finds it short
+    #   of the stop in most perturbations (rwr > 0.5), and the simulated cube is carried.
     # - typical, hammer_claw (0.389 kg): the surface over the centre of mass is the curved head and
     #   neck; under the perturbations most samples leak or peel (rwr < 0.5) and the simulation loses
     #   the seal in the lift.
@@ -216,9 +220,9 @@ def test_heaviest_object_of_each_set_with_a_centred_grasp(name):
     assert heaviest.mass <= CUP_DEFAULT.mass_cap_kg
     assert rwr <= 0.5, rwr
     _, result = pick(record=heaviest, grasp=grasp)
-    assert result["valid"] and not result["success"], result
-    if name == "basic":
-        assert result["lifted"] and result["failure"] == "seal_lost_transport", result
+    assert result["valid"], result
+    assert result["success"] == (result["label_rwr"] > 0.5), result
+    assert result["success"] == (name == "basic"), result
 
 
 def test_tool_reaches_a_grid_of_workspace_points_within_joint_limits():

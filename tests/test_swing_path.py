@@ -94,3 +94,27 @@ def test_an_off_centre_grasp_lifted_gently_hangs_at_its_static_tilt():
     phi_s = swing.static_tilt()
     assert phi_s[0] > 0.05
     assert math.hypot(carry[3], carry[4]) == pytest.approx(float(swing.returned(phi_s)[0]), rel=0.01)
+
+
+def test_each_row_swings_on_its_own():
+    # Rows are samples of one batch stepped on one clock, each from its own lift-off time: a row
+    # must come out as it does alone (a row waiting for its lift-off once drifted at its start
+    # rate, tripling a perturbed brick's lift moment).
+    cup = CUP_DEFAULT
+    mass = 0.2
+    com = np.array([[0.02, 0.0, 0.0], [0.0, 0.005, 0.0], [-0.012, 0.01, 0.0]])
+    weight = np.tile([0.0, 0.0, -mass * G], (3, 1))
+    push = np.tile([-mass * 3.1, 0.0, 0.0], (3, 1))
+    ring, frames = np.repeat(RING, 3, axis=0), np.repeat(FRAME, 3, axis=0)
+    arrival = Arrival(weight, push, np.eye(3) * mass * SIDE * SIDE / 6, mass, SUPPORT, 0.15, 1.0,
+                      np.array([0.8, 1.0, 1.3]), cup.axial_stiffness, cup.swing_damping_ratio, planned=True,
+                      transport_peak=3.1, hold_time=0.5)
+    together = swing_through(_Swing(weight, com, ring, frames, cup), arrival, com, ring, frames, cup)
+    for row in range(3):
+        one = slice(row, row + 1)
+        alone = swing_through(_Swing(weight[one], com[one], ring[one], frames[one], cup), arrival.take(one),
+                              com[one], ring[one], frames[one], cup)
+        lift_off = arrival.take(one).lift_off(_Swing(weight[one], com[one], ring[one], frames[one], cup).n,
+                                              np.zeros(1), ring[one], com[one], frames[one])[1]
+        assert lift_off[0] > 0.0
+        np.testing.assert_allclose(together[row], alone[0], rtol=0.02, atol=1e-6)

@@ -135,7 +135,7 @@ def swing_through(swing, arrival, com: np.ndarray, ring_centre: np.ndarray, fram
         alpha = np.einsum("nij,nj->ni", inverse, moment - returned[:, None] * axis - loss[:, None] * omega)
         alpha = np.where(active[:, None], alpha, 0.0)
         omega = omega + STEP * alpha
-        phi = phi + STEP * omega
+        phi = phi + STEP * np.where(active[:, None], omega, 0.0)  # held at the lift-off's tilt until then
 
         spin = np.zeros((count, 3))
         spin[:, :2] = omega

@@ -22,11 +22,13 @@ import numpy as np
 
 sys.path.insert(0, "eval/agreement")
 from suctionbench import minjerk  # noqa: E402
-from suctionbench.config import PerturbationConfig  # noqa: E402
+from suctionbench.config import (
+    LabelConfig,  # noqa: E402
+    PerturbationConfig,  # noqa: E402
+)
 from suctionbench.contact import wrench  # noqa: E402
 from suctionbench.contact.labeller import SuctionLabeller  # noqa: E402
 from suctionbench.contact.robust import arrivals  # noqa: E402
-from suctionbench.config import LabelConfig  # noqa: E402
 from suctionbench.objects.registry import load_object  # noqa: E402
 from suctionbench.sim.pick import PickRequest, PickRunner  # noqa: E402
 
@@ -115,6 +117,21 @@ def integrate(lab, cup, frame, ring, plan, seal=None, dt=5e-4, hold=1.0, ringing
     return peaks
 
 
+def _lip_recorder(episode, peak):
+    """A recorder keeping, per motion, the simulated lip's peak moment over its ring limit."""
+    cup_state = episode.cup
+    k = cup_state.sim.lip_point_stiffness(cup_state.cup)
+    theta = wrench.lip_angles(len(cup_state.lip_qpos))
+    radius = cup_state.cup.radius
+
+    def rec(data, ctl):
+        if episode.motion in peak:
+            push = -k * data.qpos[ctl.lip_qpos]
+            moment = radius * math.hypot((push * np.sin(theta)).sum(), (push * np.cos(theta)).sum())
+            peak[episode.motion] = max(peak[episode.motion], moment / max(0.5 * radius * push.sum(), 1e-9))
+    return rec
+
+
 def main():
     from suctionbench.sim import episode as episode_module
     original = episode_module.PickEpisode._carry_time
@@ -126,7 +143,8 @@ def main():
         return duration
     episode_module.PickEpisode._carry_time = carry_time
     executed = "--executed" in sys.argv
-    d = json.load(open(sys.argv[1]))
+    with open(sys.argv[1]) as f:
+        d = json.load(f)
     trials = [(x["object"], x["seed"]) for x in d["per_trial"]
               if x["failure"] in (None, "seal_lost_transport", "seal_lost_hold") and x["label_rwr"] is not None]
     part, parts = int(sys.argv[2]), int(sys.argv[3])
@@ -136,16 +154,9 @@ def main():
         runner.request.seed = int(seed)
         runner.reset()
         pose = runner.object_pose()
-        episode, cupst = runner.episode, runner.episode.cup
-        k = cupst.sim.lip_point_stiffness(cupst.cup)
-        theta = wrench.lip_angles(len(cupst.lip_qpos))
+        episode = runner.episode
         peak = {"lift": 0.0, "transport": 0.0, "hold": 0.0}
-
-        def rec(data, ctl):
-            if episode.motion in peak:
-                push = -k * data.qpos[ctl.lip_qpos]
-                mom = cupst.cup.radius * math.hypot((push * np.sin(theta)).sum(), (push * np.cos(theta)).sum())
-                peak[episode.motion] = max(peak[episode.motion], mom / max(0.5 * cupst.cup.radius * push.sum(), 1e-9))
+        rec = _lip_recorder(episode, peak)
         episode.recorder, episode.record_every = rec, 1
         carried.clear()
         result = runner.run_after_reset()
@@ -173,11 +184,12 @@ def main():
         ode = integrate(lab, cup, frames[0], seal.ring_centre[0], (plan[0], plan[1], length), seal)
         ode_quiet = integrate(lab, cup, frames[0], seal.ring_centre[0], (plan[0], plan[1], length), ringing=False)
         rows.append(dict(object=key, seed=seed, success=result["success"], failure=result["failure"],
-                         rwr=result["label_rwr"], T=plan[1], T_planned=planned_time, sim=peak, closed=closed, closed_ok=closed_ok, ode=ode, ode_quiet=ode_quiet,
-                         mass=runner.record.mass))
+                         rwr=result["label_rwr"], T=plan[1], T_planned=planned_time, sim=peak, closed=closed,
+                         closed_ok=closed_ok, ode=ode, ode_quiet=ode_quiet, mass=runner.record.mass))
         print(key, seed, result["success"], {k_: round(v_, 2) for k_, v_ in peak.items()},
               [round(x, 2) for x in closed], {k_: round(v_, 2) for k_, v_ in ode.items()}, flush=True)
-    json.dump(rows, open(sys.argv[4], "w"))
+    with open(sys.argv[4], "w") as out:
+        json.dump(rows, out)
 
 
 if __name__ == "__main__":

@@ -166,17 +166,10 @@ def stable_poses(mesh: trimesh.Trimesh, com: np.ndarray) -> list[dict[str, Any]]
     return kept or poses[:1]
 
 
-def convex_parts(
-    mesh: trimesh.Trimesh, threshold: float, max_hulls: int, seed: int = 0, options: dict | None = None
-) -> list[trimesh.Trimesh]:
-    """Convex decomposition with CoACD (MuJoCo collides meshes by their convex hulls), run in a child
-    process (suctionbench.objects.decompose) so that a native crash raises CoacdFailed here."""
-    run = CoacdRun(np.asarray(mesh.vertices), np.asarray(mesh.faces), threshold, max_hulls, seed, options)
-    return _hulls(run.parts())
-
-
 def _hulls(raw: list[tuple[np.ndarray, np.ndarray]]) -> list[trimesh.Trimesh]:
-    """CoACD's parts as convex hulls in a fixed order (by centroid)."""
+    """CoACD's parts (`decompose.CoacdRun`: each run in a child process, so that a native crash
+    raises CoacdFailed here) as convex hulls, which is how MuJoCo collides meshes, in a fixed order
+    (by centroid)."""
     parts = [trimesh.Trimesh(v, f, process=True).convex_hull for v, f in raw]
     return sorted(parts, key=lambda p: tuple(np.round(p.centroid, 6)))
 

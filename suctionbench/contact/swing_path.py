@@ -58,15 +58,31 @@ PHASES = ("lift", "carry")
 """The phases whose worst instants the lip is judged at: the lift, then the transport and the hold."""
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise a x b of (N, 3) arrays (np.cross's axis handling costs more than the product on the
+    short rows the step loop works on)."""
+    return np.column_stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                            a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]])
+
+
 def _rotate(phi: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """v (N, 3) turned by the in-plane rotation vectors phi (N, 2) (Rodrigues)."""
+    """v (N, 3) turned by the in-plane rotation vectors phi (N, 2): Rodrigues,
+    v cos a + (n x v) sin a + n (n . v)(1 - cos a), written out for an axis n = (n_x, n_y, 0)."""
     angle = np.hypot(phi[:, 0], phi[:, 1])
-    axis = np.zeros_like(v)
     safe = np.maximum(angle, 1e-15)
-    axis[:, 0], axis[:, 1] = phi[:, 0] / safe, phi[:, 1] / safe
-    c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
-    along = np.einsum("ni,ni->n", axis, v)[:, None]
-    return v * c + np.cross(axis, v) * s + axis * along * (1.0 - c)
+    nx, ny = phi[:, 0] / safe, phi[:, 1] / safe
+    c, s = np.cos(angle), np.sin(angle)
+    dot = (nx * v[:, 0] + ny * v[:, 1]) * (1.0 - c)
+    return np.column_stack([c * v[:, 0] + s * ny * v[:, 2] + nx * dot, c * v[:, 1] - s * nx * v[:, 2] + ny * dot,
+                            c * v[:, 2] + s * (nx * v[:, 1] - ny * v[:, 0])])
+
+
+def _axis_turned(phi: np.ndarray) -> np.ndarray:
+    """(N, 3) the unit z axis turned by the in-plane rotation vectors phi (N, 2): (n_y sin a,
+    -n_x sin a, cos a)."""
+    angle = np.hypot(phi[:, 0], phi[:, 1])
+    scale = np.sin(angle) / np.maximum(angle, 1e-15)
+    return np.column_stack([phi[:, 1] * scale, -phi[:, 0] * scale, np.cos(angle)])
 
 
 def _damping(swing, phi_s: np.ndarray, about_lip: np.ndarray, zeta: float) -> np.ndarray:
@@ -77,6 +93,21 @@ def _damping(swing, phi_s: np.ndarray, about_lip: np.ndarray, zeta: float) -> np
     along = np.einsum("ni,nij,nj->n", axis, about_lip, axis)
     inertia = np.where(swing.tips, along, 0.5 * (about_lip[:, 0, 0] + about_lip[:, 1, 1]))
     return 2.0 * zeta * np.sqrt(np.maximum(swing.stiffness(phi_s), 0.0) * inertia)
+
+
+def _lip_wrench(phi: np.ndarray, omega: np.ndarray, alpha: np.ndarray, arm: np.ndarray, arm0: np.ndarray,
+                load: np.ndarray, lip: np.ndarray, mass: float) -> np.ndarray:
+    """(M, 6) the lip's wrench seen from the tilted object (module docstring): the load less what
+    accelerates the centre of mass (m (alpha x r + omega x (omega x r))), the moment `lip` the cup
+    returns, and the load's twist about the approach."""
+    spin = np.zeros_like(arm)
+    spin[:, :2] = omega
+    turn = np.zeros_like(arm)
+    turn[:, :2] = alpha
+    centre = _cross(turn, arm) + _cross(spin, _cross(spin, arm))
+    force = _rotate(-phi, load - mass * centre)  # seen from the object: turned back by the tilt
+    twist = _cross(arm0, _rotate(-phi, load))[:, 2]
+    return np.column_stack([force, lip, twist])
 
 
 def swing_through(swing, arrival, com: np.ndarray, ring_centre: np.ndarray, frames: np.ndarray,
@@ -128,28 +159,25 @@ def swing_through(swing, arrival, com: np.ndarray, ring_centre: np.ndarray, fram
             phase = 1
         load = mass * (gravity - accel)
         arm = _rotate(phi, arm0)
-        moment = np.cross(arm, load)[:, :2]
+        along = _axis_turned(phi)  # the object's approach axis, turned by the tilt
+        moment = _cross(arm, load)[:, :2]
         tilt = np.hypot(phi[:, 0], phi[:, 1])
         axis = phi / np.maximum(tilt, 1e-15)[:, None]
         returned = swing.returned(tilt)
         alpha = np.einsum("nij,nj->ni", inverse, moment - returned[:, None] * axis - loss[:, None] * omega)
         alpha = np.where(active[:, None], alpha, 0.0)
         omega = omega + STEP * alpha
-        phi = phi + STEP * np.where(active[:, None], omega, 0.0)  # held at the lift-off's tilt until then
-
-        spin = np.zeros((count, 3))
-        spin[:, :2] = omega
-        turn = np.zeros((count, 3))
-        turn[:, :2] = alpha
-        centre = np.cross(turn, arm) + np.cross(spin, np.cross(spin, arm))
-        back = -phi  # seen from the object: turned back by the tilt
-        force = _rotate(back, load - mass * centre)
-        twist = np.cross(arm0, _rotate(back, load))[:, 2]
         lip = returned[:, None] * axis + loss[:, None] * omega
-        ratio = np.hypot(lip[:, 0], lip[:, 1]) / (limit_scale * np.maximum(vacuum - force[:, 2], 1e-9))
-        worse = active & (ratio > best[:, phase])
-        best[worse, phase] = ratio[worse]
-        out[worse, phase] = np.column_stack([force, lip, twist])[worse]
+        # The instant is chosen by the load's pull along the object's axis; the lip's full wrench
+        # (less what accelerates the centre of mass) is formed only where a row has a new worst.
+        pull = np.einsum("ni,ni->n", load, along)
+        ratio = np.hypot(lip[:, 0], lip[:, 1]) / (limit_scale * np.maximum(vacuum - pull, 1e-9))
+        worse = np.flatnonzero(active & (ratio > best[:, phase]))
+        if len(worse):
+            best[worse, phase] = ratio[worse]
+            out[worse, phase] = _lip_wrench(phi[worse], omega[worse], alpha[worse], arm[worse], arm0[worse],
+                                            load[worse], lip[worse], mass)
+        phi = phi + STEP * np.where(active[:, None], omega, 0.0)  # held at the lift-off's tilt until then
         t += STEP
     never = ~np.isfinite(best)  # a phase the swing never reached (no lift left after the lift-off)
     out[never] = 0.0

@@ -412,10 +412,10 @@ class PerturbationConfig:
     transport_direction: tuple[float, float, float] | None = None
     """The transport's direction (mesh frame; normalised) where the pick's motion is known when
     labelling: the episode's labeller, whose planned transport runs straight from the lift's end
-    to the bin (`PickEpisode.planned_transport`). The transport is then two load cases instead of
-    one at a random azimuth: the start's push against it and the braking's along it, each with its
-    own side of the swing's response (contact/arrival.py), over the planned `transport_time`.
-    None: unknown (a dataset's labels), azimuths drawn per sample."""
+    to the bin (`PickEpisode.planned_transport`). The swing is then followed in time through the
+    planned lift, transport (`transport_time`, `transport_length`) and hold (contact/swing_path.py)
+    and judged at the lift's and the carry's worst instants. None: unknown (a dataset's labels),
+    azimuths drawn per sample and the closed form's turning points (contact/arrival.py)."""
 
     hold_time: float = 0.5
     """How long (s) the pick holds the object over the bin after the transport (the episode's

@@ -290,8 +290,9 @@ straight min-jerk move from the lift's end to the tool tip's place over the bin,
 EpisodeConfig.transport_min_time (0.8 s), longer where the cup's rated acceleration
 (T = sqrt(5.774 L / a): 0.35 m at 3.1 m/s^2 take 0.81 s) or the joints' speed limits ask for it.
 Over 300 random transports from the workspace (lift ends within 10 cm of its centre, 0.15-0.3 m
-high, tools up to 45 deg off vertical; 0.23-0.49 m long): 10 % take the shortest 0.8 s, half at most
-1.02 s, 90 % at most 1.65 s, the longest 2.16 s (the tilted tools' joint travel). The upper end is
+high, tools up to 45 deg off vertical; 0.23-0.49 m long; eval/agreement/transport_probe/
+transport_bounds.py): 10 % take the shortest 0.8 s, half at most 1.02 s, 90 % at most 1.65 s, the
+longest 2.16 s (the tilted tools' joint travel); the joints' speed limits set 80 % of the times. The upper end is
 that 90th percentile: a longer transport is gentler still (the response factor falls towards 1)."""
 
 CUP_DEFAULT = CupConfig()
@@ -426,7 +427,8 @@ class PerturbationConfig:
     """Length (m) of the planned transport's straight line, with `transport_direction`: a min-jerk
     move of L metres over T = transport_time peaks at 5.774 L / T^2, the transport's inertial load
     (at most inertial_acceleration, the cup's rating, which only the shortest transports reach:
-    the joints' speed limits set 90 % of them longer). None: the rated peak."""
+    the joints' speed limits set 80 % of them longer; planned peaks 0.6-3.1 m/s^2, median 2.0, over
+    300 random transports: eval/agreement/transport_probe/transport_bounds.py). None: the rated peak."""
 
     press_compression: float = 0.0
     """Compression (m) of the bellows at which the pick's touch-down stops and holds while the

@@ -124,14 +124,16 @@ def arrivals(obj: ObjectState, config: PerturbationConfig, cup: CupConfig, weigh
     if obj.inertia is None or obj.support is None:
         return None
     duration = config.transport_time if transport_time is None else transport_time
-    planned = config.transport_direction is not None and inertial.shape[1] == 2
-    return [
-        Arrival(weight, inertial[:, 1] if planned else (None if case == 0 else inertial[:, case]),
-                np.asarray(obj.inertia, dtype=float), obj.mass, np.asarray(obj.support, dtype=float),
-                config.lift_height, config.lift_time, duration, cup.axial_stiffness, cup.swing_damping_ratio,
-                planned=planned, transport_peak=config.transport_peak, hold_time=config.hold_time)
-        for case in range(max(inertial.shape[1], 1))
-    ]
+
+    def case(transport_force: np.ndarray | None, planned: bool = False) -> Arrival:
+        return Arrival(weight, transport_force, np.asarray(obj.inertia, dtype=float), obj.mass,
+                       np.asarray(obj.support, dtype=float), config.lift_height, config.lift_time, duration,
+                       cup.axial_stiffness, cup.swing_damping_ratio, planned=planned,
+                       transport_peak=config.transport_peak, hold_time=config.hold_time)
+
+    if config.transport_direction is not None and inertial.shape[1] == 2:  # one swing in time, both phases
+        return [case(inertial[:, 1], planned=True)] * 2
+    return [case(None if index == 0 else inertial[:, index]) for index in range(max(inertial.shape[1], 1))]
 
 
 def inertial_forces(

@@ -105,9 +105,9 @@ def _lip_wrench(phi: np.ndarray, omega: np.ndarray, alpha: np.ndarray, arm: np.n
     turn = np.zeros_like(arm)
     turn[:, :2] = alpha
     centre = _cross(turn, arm) + _cross(spin, _cross(spin, arm))
-    force = _rotate(-phi, load - mass * centre)  # seen from the object: turned back by the tilt
-    twist = _cross(arm0, _rotate(-phi, load))[:, 2]
-    return np.column_stack([force, lip, twist])
+    seen = _rotate(-phi, load)  # seen from the object: turned back by the tilt
+    force = seen - mass * _rotate(-phi, centre)
+    return np.column_stack([force, lip, _cross(arm0, seen)[:, 2]])
 
 
 def swing_through(swing, arrival, com: np.ndarray, ring_centre: np.ndarray, frames: np.ndarray,
@@ -119,7 +119,7 @@ def swing_through(swing, arrival, com: np.ndarray, ring_centre: np.ndarray, fram
     direction, its transport_time, transport_peak and hold_time the timing)."""
     count = len(frames)
     if count == 0:
-        return np.zeros((0, 2, 6))
+        return np.zeros((0, len(PHASES), 6))
     mass = arrival.mass
     gravity = np.einsum("nji,nj->ni", frames, arrival.weight) / mass  # g in the contact frame
     up = -gravity / np.maximum(np.linalg.norm(gravity, axis=1), 1e-12)[:, None]
@@ -143,8 +143,8 @@ def swing_through(swing, arrival, com: np.ndarray, ring_centre: np.ndarray, fram
     duration = np.broadcast_to(np.asarray(arrival.transport_time, dtype=float), (count,))
     peak = arrival.transport_peak / minjerk.PEAK_ACCELERATION
     end = lift_time + duration + arrival.hold_time
-    best = np.full((count, 2), -np.inf)
-    out = np.zeros((count, 2, 6))
+    best = np.full((count, len(PHASES)), -np.inf)
+    out = np.zeros((count, len(PHASES), 6))
     limit_scale = 0.5 * cup.radius
     vacuum = cup.vacuum_force
     t = float(np.min(t_off))
@@ -152,11 +152,11 @@ def swing_through(swing, arrival, com: np.ndarray, ring_centre: np.ndarray, fram
         active = (t >= t_off) & (t < end)
         if t < lift_time:
             accel = up * (lift_rate * minjerk.acceleration(t / lift_time))
-            phase = 0
+            phase = PHASES.index("lift")
         else:
             u = np.clip((t - lift_time) / duration, 0.0, 1.0)
             accel = ahead * (peak * minjerk.acceleration(u))[:, None]
-            phase = 1
+            phase = PHASES.index("carry")
         load = mass * (gravity - accel)
         arm = _rotate(phi, arm0)
         along = _axis_turned(phi)  # the object's approach axis, turned by the tilt

@@ -221,14 +221,11 @@ class _Swing:
         c, s = np.cos(phi)[:, None], np.sin(phi)[:, None]
         return self.f * c - np.cross(self.n, self.f) * s + self.n * self.n_f[:, None] * (1.0 - c)
 
-    def cup_rate(self, phi: np.ndarray) -> np.ndarray:
-        """The cup's return rate dR / dphi at phi: k_s below the stop, k_c beyond."""
-        return np.where(phi <= self.phi_stop, self.k_series, self.k_caught)
-
     def stiffness(self, phi: np.ndarray) -> np.ndarray:
-        """The swing's stiffness at phi, -d moment / d phi: the cup's return rate (`cup_rate`)
-        plus the pendulum's A sin(phi) + B cos(phi)."""
-        return self.cup_rate(phi) + self.a * np.sin(phi) + self.b * np.cos(phi)
+        """The swing's stiffness at phi, -d moment / d phi: the cup's return rate (k_s below the
+        stop, k_c beyond) plus the pendulum's A sin(phi) + B cos(phi)."""
+        rate = np.where(phi <= self.phi_stop, self.k_series, self.k_caught)
+        return rate + self.a * np.sin(phi) + self.b * np.cos(phi)
 
     def static_tilt(self) -> np.ndarray:
         """Equilibrium tilt: moment(phi) = 0 on [0, SWING_CAP] (SWING_CAP if none)."""

@@ -115,15 +115,14 @@ def _pose(position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
 
 
 def grasp_labels(mesh: Any, com: np.ndarray, mass: float, cup: CupConfig, point: np.ndarray, approach: np.ndarray,
-                 seed: int, transport: tuple[np.ndarray, float] | None = None) -> dict[str, Any]:
+                 seed: int, transport: tuple[np.ndarray, float, float] | None = None) -> dict[str, Any]:
     """The label fields of a trial record (`NO_LABELS`' keys) for one world grasp on an object
     whose world mesh, centre of mass and mass are given, labelled for the pick episode's loads:
-    with its planned `transport` (world direction, duration: `PickEpisode.planned_transport`)
+    with its planned `transport` (world direction, duration, length: `PickEpisode.planned_transport`)
     where known, else a transport of unknown direction and length."""
     extra = {} if transport is None else {
         "transport_direction": tuple(float(v) for v in transport[0]), "transport_time": float(transport[1]),
-        "transport_length": float(transport[2]),
-        "transport_time_max": None}
+        "transport_length": float(transport[2]), "transport_time_max": None}
     config = LabelConfig(cup=cup, perturbation=PerturbationConfig.for_episode(cup, **extra))
     labeller = SuctionLabeller(mesh, config, mass=mass, com=com)
     labels = labeller.label(np.asarray(point)[None], np.asarray(approach)[None], seed, metrics=tuple(METRICS))

@@ -1,5 +1,6 @@
 """Transport verdicts of the time-resolved swing and the closed form against the simulation, from
-swing_ode.py's runs (run from the repository root)."""
+swing_ode.py's runs (git show 2b5bc1a:eval/agreement/transport_probe/swing_ode.py; run this from the
+repository root)."""
 import json
 
 import numpy as np

@@ -84,6 +84,27 @@ def test_the_cup_lands_on_the_planned_grasp():
     offset, result = runner.episode.execute_measuring_landing(point, approach)
     assert result.success, result
     assert offset is not None and offset < 0.5e-3, offset
+    # Along the axis: the arm stops once the bellows has compressed by compression_stop, the
+    # unloaded lip centre that far past the face (less what the lip folds, at most lip_travel).
+    stop = EpisodeConfig().compression_stop
+    assert -stop - 1e-3 < result.touchdown_short < -stop + CUP_DEFAULT.lip_travel, result.touchdown_short
+
+
+def test_a_grasp_inside_a_lying_tubes_bore_is_blocked_by_its_wall():
+    # The bottom of a lying paper core's bore (R_o = 22, R_i = 19 mm), approached straight down: the
+    # cup meets the core's crown first, R_o + R_i = 41 mm short of its target, and stops once the
+    # bellows has compressed by compression_stop (4 mm), the lip folded by up to lip_travel (2 mm):
+    # 35-37 mm short. It seals there, on a grasp nobody planned (the agreement study's `blocked`).
+    record = load_object("basic/tube_roll")
+    runner = PickRunner(PickRequest(record.key, seed=0, placement="stable", record=record))
+    runner.reset()
+    pose = runner.object_pose()
+    down = pose[:3, :3].T @ np.array([0.0, 0.0, -1.0])
+    assert abs(down[2]) < 1e-3  # lying on its side: the core's axis (z) horizontal
+    point = pose[:3, :3] @ (0.019 * down) + pose[:3, 3]
+    result = runner.episode.execute(point, np.array([0.0, 0.0, -1.0]))
+    stop, fold = EpisodeConfig().compression_stop, CUP_DEFAULT.lip_travel
+    assert 0.041 - stop - fold - 1e-3 < result.touchdown_short < 0.041 - stop + 1e-3, result.touchdown_short
 
 
 def test_a_dropped_object_is_at_rest_when_the_grasp_is_chosen():

@@ -24,9 +24,9 @@ import numpy as np
 
 from suctionbench import minjerk
 from suctionbench.config import TRANSPORT_TIMES
-from suctionbench.sim.cup import SuctionController
 from suctionbench.sim.ik import solve_ik
 from suctionbench.sim.scene import Scene
+from suctionbench.sim.suction import SuctionController
 from suctionbench.sim.yumi import HOME_RIGHT, JOINT_SPEED_LIMITS, RIGHT_ARM_JOINTS
 
 FAILURES = (
@@ -173,6 +173,12 @@ class EpisodeResult:
     """Largest acceleration (m/s^2) of the cup (the rigid tool body on the flange) in each motion
     that carries the object ("lift", "transport"), from its position at the sim rate (second
     differences over one 2 ms step)."""
+    touchdown_short: float | None = None
+    """How far (m) short of the planned point, along the approach, the guarded approach stopped
+    (the unloaded cup's lip centre at the arm's stop): about -compression_stop on target, more
+    where the bellows met a surface before it (the object's own wall in the way: a grasp inside a
+    tube's bore is approached through the tube, and the cup seals on the outside). None if the
+    arm never reached the object."""
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -449,7 +455,7 @@ class PickEpisode:
         start_wall, start_sim = time.perf_counter(), d.time
         phases: dict[str, float] = {}
         self._tool_path = {}
-        seal_time, peak_slip, lifted, in_bin = None, 0.0, False, False
+        seal_time, peak_slip, lifted, in_bin, touchdown_short = None, 0.0, False, False, None
         failure, valid, detail = None, True, None
         point, approach = np.asarray(point, float), np.asarray(approach, float) / np.linalg.norm(approach)
         try:
@@ -477,6 +483,7 @@ class PickEpisode:
                           constant_speed=True)
             self.watch_collisions = False
             q_contact = d.qpos[self.arm_qpos].copy()
+            touchdown_short = float((point - self._tip_at(q_contact)) @ approach)
             self.cup.commanded = True
             self._run(np.array([q_contact, q_contact]), c.vacuum_dwell)
             if self.cup.sealed < 0 or not self._take_seal(self.cup.sealed):
@@ -524,7 +531,7 @@ class PickEpisode:
             success=success, failure=failure, valid=valid, seal_time=seal_time, peak_slip=peak_slip,
             lifted=lifted, in_bin=in_bin, sim_time=d.time - start_sim,
             wall_time=time.perf_counter() - start_wall, detail=detail, phases=phases,
-            peak_acceleration=self._peak_accelerations(),
+            peak_acceleration=self._peak_accelerations(), touchdown_short=touchdown_short,
         )
 
     def _take_seal(self, body: int) -> bool:

@@ -24,11 +24,11 @@ from suctionbench.sim.cup import (
     ENV_CONTYPE,
     SIM_CUP_DEFAULT,
     SimCupConfig,
-    SuctionController,
     add_suction_tool,
     expose_to_vacuum,
 )
 from suctionbench.sim.episode import EpisodeConfig
+from suctionbench.sim.suction import SuctionController
 
 CARRIAGE_MASS = 5.0
 """Mass (kg) of the carriage: much heavier than anything the cup lifts, as an arm is."""

@@ -5,7 +5,7 @@ import math
 
 import pytest
 
-from suctionbench.evaluation.agreement import blocked, lift_cause, run_agreement, seal_cause, summarize
+from suctionbench.evaluation.agreement import lift_cause, run_agreement, seal_cause, summarize
 
 
 def _row(label_seal, sim_seal, rwr, success, *, wr=True, tilt=5.0, torque_ratio=0.5, failure=None):
@@ -21,24 +21,15 @@ def test_summary_counts_match_hand_computed_confusion():
         _row(False, True, 0.1, True, wr=False),  # seal disagreement and false negative
         _row(False, False, 0.0, False, failure="no_seal"),  # agree
         {**_row(True, False, 0.9, False), "failure": "unreachable"},  # never executed: left out
-        {**_row(False, True, 0.0, True), "blocked": True},  # sealed short of its target: left out
     ]
     out = summarize(rows, threshold=0.5, tolerance_deg=21.8)
-    assert out["executed"] == 4 and out["not_executed"] == {"unreachable": 1, "blocked": 1}
+    assert out["executed"] == 4 and out["not_executed"] == {"unreachable": 1}
     assert out["seal_agreement"] == 0.75  # 3 of 4 executed trials agree on the seal
     assert out["lift_confusion"] == {"label_pos_sim_success": 1, "label_pos_sim_fail": 1,
                                      "label_neg_sim_success": 1, "label_neg_sim_fail": 1}
     assert out["precision"] == 0.5 and out["recall"] == 0.5 and out["accuracy"] == 0.5
     assert out["lift_disagreements"] == {"labeller robust, sim fails: seal_lost_lift": 1,
                                          "sim succeeds, labeller: no seal": 1}
-
-
-def test_a_cup_stopped_beyond_its_reach_short_of_the_target_is_blocked():
-    # The guarded approach stops about compression_stop (4 mm) past the target on a surface the
-    # ring rests on; stopped more than the cup's height (15 mm) short, it met another surface.
-    assert not blocked({"touchdown_short": -0.004}, 0.015)
-    assert not blocked({"touchdown_short": None}, 0.015)  # the arm never got there
-    assert blocked({"touchdown_short": 0.035}, 0.015)
 
 
 def test_causes_follow_the_cup_limits():

@@ -131,3 +131,26 @@ def test_the_labellers_press_is_the_episodes_touch_down():
     assert labels.press_compression == EpisodeConfig().compression_stop
     assert labels.table_friction == SceneConfig().friction
     assert PerturbationConfig().press_compression == 0.0  # the paper's model has no press
+
+
+def test_the_press_acts_where_the_lip_lands_not_at_a_target_behind_a_surface():
+    # A target inside a lying tube's bore (R_o = 22, R_i = 19 mm), on the bore's wall 30 deg past
+    # its bottom, approached along that wall's inward direction (through the tube's axis): the cup
+    # meets the outer wall 30 deg from the top first and seals there (the seal model's rays start
+    # outside the object), so it presses there, its force along the normal through the axis,
+    # which the lip's friction need only tilt by half the grasp's angle, 15 deg < atan(0.5) = 26.6
+    # deg, to pass through the tube's line of support: it stays put. Pressed at the target, the
+    # chord to the support line lies ~90 deg off the force: it would roll away.
+    outer = trimesh.creation.cylinder(radius=0.022, height=0.22, sections=64)
+    inner = trimesh.creation.cylinder(radius=0.019, height=0.24, sections=64)
+    tube = outer.difference(inner)
+    tube.apply_transform(trimesh.transformations.rotation_matrix(math.pi / 2, [0, 1, 0]))
+    a = math.radians(30.0)
+    out = np.array([[0.0, -math.sin(a), -math.cos(a)]])
+    target, approach = 0.019 * out, out
+    labeller = SuctionLabeller(tube, LabelConfig.for_episode(CUP_DEFAULT), mass=0.064)
+    seal = labeller.seal(target, approach)
+    assert seal.seal[0], seal.failure_names[0]
+    crown = -0.022 * out[0]
+    assert np.linalg.norm(seal.ring_centre[0] - crown) < 2e-3  # where the lip lands (less its sag)
+    assert not labeller.stays_put(target, approach)[0]

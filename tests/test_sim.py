@@ -94,7 +94,8 @@ def test_a_grasp_inside_a_lying_tubes_bore_is_blocked_by_its_wall():
     # The bottom of a lying paper core's bore (R_o = 22, R_i = 19 mm), approached straight down: the
     # cup meets the core's crown first, R_o + R_i = 41 mm short of its target, and stops once the
     # bellows has compressed by compression_stop (4 mm), the lip folded by up to lip_travel (2 mm):
-    # 35-37 mm short. It seals there, on a grasp nobody planned (the agreement study's `blocked`).
+    # 35-37 mm short. It seals there, where the labeller too puts the cup: on the first surface along
+    # the approach (contact/seal.py casts its rays from outside the object).
     record = load_object("basic/tube_roll")
     runner = PickRunner(PickRequest(record.key, seed=0, placement="stable", record=record))
     runner.reset()

@@ -81,10 +81,14 @@ class SuctionLabeller:
 
     def seal(self, points: np.ndarray, approaches: np.ndarray) -> SealResult:
         """Nominal seal model for each grasp; with a touch-down press in the perturbation model, a
-        seal also needs the object to stay put under it (contact/press.py)."""
+        seal also needs the object to stay put under it (contact/press.py), pressed where the lip
+        lands: the ring centre on the first surface along the approach (seal.py), which is not the
+        target where another surface lies across the approach (a target inside a lying tube's bore
+        is reached through its crown, where the cup seals)."""
         points, approaches = _check_grasps(points, approaches)
         result = self.seal_model.evaluate(points, self.frames(points, approaches))
-        pushed = result.seal & ~self.stays_put(points, approaches)
+        landed = np.where(np.isfinite(result.ring_centre), result.ring_centre, points)
+        pushed = result.seal & ~self.stays_put(landed, approaches)
         result.seal[pushed] = False
         result.failure[pushed] = PUSHED_AWAY
         return result

@@ -3,8 +3,7 @@
 Trial i of a set drops object i mod |set| (seed base + i), draws one surface grasp uniformly
 (known state, no ranking: the `random-surface` policy), labels it analytically in the true pose and
 executes it in MuJoCo. Grasps the robot cannot execute (unreachable, arm collision, unstable
-placement, an approach the object itself blocks: `blocked`) are counted and left out, so the study
-scores the two cup models on reachable grasps only.
+placement) are counted and left out, so the study scores the two cup models on reachable grasps only.
 
 Per set and overall it reports seal agreement (labeller's nominal seal vs the simulated cup sealing),
 lift accuracy / precision / recall of `rwr > threshold` against simulated success, AP and Spearman of
@@ -57,16 +56,6 @@ def grasp_physics(runner: Any, pose: np.ndarray, record: dict[str, Any]) -> dict
     }
 
 
-def blocked(result: dict[str, Any], reach: float) -> bool:
-    """Whether the cup stopped more than `reach` (the cup's height) short of its target: a surface
-    outside the cup's cone stopped it (the object's own wall across the approach, e.g. a grasp
-    inside a tube's bore), and it sealed there, not on the grasp labelled. The labeller judges the
-    surface under the ring and the cone (as the paper does), not the whole approach, so such a
-    trial tests neither model's verdict on the same grasp: left out, and counted."""
-    short = result.get("touchdown_short")
-    return short is not None and short > reach
-
-
 def _trials_for_object(set_name: str, key: str, seeds: list[int]) -> list[dict[str, Any]]:
     """Run the random-surface trials of one object (one scene, many seeds); picklable for pools."""
     from suctionbench.objects.registry import load_object
@@ -86,7 +75,6 @@ def _trials_for_object(set_name: str, key: str, seeds: list[int]) -> list[dict[s
             "label_wr": result["label_wr"], "label_rwr": result["label_rwr"],
             "sim_seal": result["seal_time"] is not None, "success": bool(result["success"]),
             "failure": result["failure"], "valid": bool(result["valid"]), "mass": record.mass,
-            "blocked": blocked(result, runner.request.cup.height),
         }
         if result["grasp_world"] is not None and row["valid"] and row["failure"] not in NOT_EXECUTED:
             row.update(grasp_physics(runner, pose, result))
@@ -128,10 +116,10 @@ def summarize(rows: list[dict[str, Any]], threshold: float, tolerance_deg: float
     """Agreement figures of executed trials (see module docstring)."""
     from suctionbench.evaluation.runner import score_stats
 
-    executed = [r for r in rows if r["valid"] and r["failure"] not in NOT_EXECUTED and not r.get("blocked")]
+    executed = [r for r in rows if r["valid"] and r["failure"] not in NOT_EXECUTED]
     out: dict[str, Any] = {"trials": len(rows), "executed": len(executed),
-                           "not_executed": dict(Counter("blocked" if r.get("blocked") else r["failure"] or "invalid"
-                                                        for r in rows if r not in executed))}
+                           "not_executed": dict(Counter(r["failure"] or "invalid" for r in rows
+                                                        if r not in executed))}
     if not executed:
         return out
     label_seal = np.array([r["label_seal"] for r in executed])

@@ -1,4 +1,4 @@
-"""The gymnasium environment suctionbench/SuctionPick-v0: registration, gymnasium's own checker,
+"""The gymnasium environment suctionbench/SuctionPick-v1: registration, gymnasium's own checker,
 determinism, a sensible top-down pick, invalid actions and repeated attempts."""
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from gymnasium.utils.env_checker import check_env
 import suctionbench  # noqa: F401  (registers the environments)
 from suctionbench.errors import InputError
 
-ENV_ID = "suctionbench/SuctionPick-v0"
+ENV_ID = "suctionbench/SuctionPick-v1"
 BOX = {"object": "basic/box_tea"}  # 14 x 7 x 7 cm box: a flat face up however it lands
 INFO_KEYS = {
     "object", "attempt", "success", "valid", "failure", "detail", "label_seal", "label_seal_failure", "label_wr",
@@ -173,3 +173,9 @@ def test_scene_unstable_after_an_attempt_ends_the_episode_with_the_last_image(mo
         assert all(np.array_equal(obs[k], after[k]) for k in obs)
     finally:
         env.close()
+
+
+def test_the_previous_physics_version_is_refused_with_the_current_id():
+    # v0's vacuum was shared among the probe's contacts; its results are not comparable with v1's.
+    with pytest.raises(gymnasium.error.DeprecatedEnv, match="v1"):
+        gymnasium.make("suctionbench/SuctionPick-v0")

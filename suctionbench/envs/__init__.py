@@ -4,10 +4,12 @@ Importing this package (``import suctionbench`` does) registers each environment
 string entry point, so registration costs only the import of gymnasium: MuJoCo, the scene and
 the analytic labeller are imported when an environment is first made. Ids are versioned; a
 change of physics, spaces or reward makes a new ``-vN`` rather than changing an existing one, so
-results reported against an id stay comparable.
+results reported against an id stay comparable. v1 (2026-11-26): the simulated vacuum pulls along
+the cup's axis however an object's collision geometry is decomposed (eval/README.md); making a
+``-v0`` id raises gymnasium's DeprecatedEnv, naming the ``-v1`` to use.
 
     >>> import gymnasium, suctionbench
-    >>> env = gymnasium.make("suctionbench/SuctionPick-v0", object_set="basic")
+    >>> env = gymnasium.make("suctionbench/SuctionPick-v1", object_set="basic")
 """
 
 from __future__ import annotations
@@ -17,8 +19,8 @@ from typing import Any
 import gymnasium
 
 ENVIRONMENTS: dict[str, str] = {
-    "suctionbench/SuctionPick-v0": "suctionbench.envs.suction_pick:SuctionPickEnv",
-    "suctionbench/SuctionBin-v0": "suctionbench.envs.suction_bin:SuctionBinEnv",
+    "suctionbench/SuctionPick-v1": "suctionbench.envs.suction_pick:SuctionPickEnv",
+    "suctionbench/SuctionBin-v1": "suctionbench.envs.suction_bin:SuctionBinEnv",
 }
 """Environment id -> entry point ("module:Class"), imported only by gymnasium.make."""
 

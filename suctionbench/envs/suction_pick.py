@@ -1,4 +1,4 @@
-"""`suctionbench/SuctionPick-v0`: the benchmark's simulated pick as a gymnasium environment.
+"""`suctionbench/SuctionPick-v1`: the benchmark's simulated pick as a gymnasium environment.
 
 The environment is a thin layer over `suctionbench.sim.pick.PickRunner`: the runner builds the
 scene, places the object, renders the observation and executes the pick; this module only maps
@@ -159,7 +159,7 @@ class SuctionPickEnv(gymnasium.Env):
 
     ```python
     gymnasium.make(
-        "suctionbench/SuctionPick-v0",
+        "suctionbench/SuctionPick-v1",
         object_set="basic",         # basic, typical, adversarial, or a user set (suctionbench objects list)
         cup="default",              # cup preset (suctionbench.config.CUP_PRESETS), shared by sim and label
         camera="primesense",        # camera preset or intrinsics TOML file; sets H, W of the images

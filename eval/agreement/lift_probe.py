@@ -1,0 +1,131 @@
+"""The lift's swing in both models, for agreement trials the labeller rejects and the simulation
+carries (eval/README.md, agreement "Now: the simulated vacuum pulls along the axis").
+
+Usage:
+  python eval/agreement/lift_probe.py swing OBJECT:SEED [OBJECT:SEED ...]
+      the labeller's nominal lip wrench at the lift's and the carry's worst instants (moment over
+      the ring limit r (V + f_z) / 2, shear and twist over the friction limits), its swing from the
+      lift-off (static tilt, rate, time; tilt every 40 ms), and the simulated tilts every 40 ms of
+      the lift (bellows, and the object against the bellows' end: the lip's own tilt).
+  python eval/agreement/lift_probe.py relabel OUT.json [--no-sqrt3]
+      relabel (the labeller only, no simulation) the trials of agreement.json that seal in the
+      labeller and carry or score rwr >= 0.1; --no-sqrt3 drops the paper's sqrt(3) from the
+      friction box (the most permissive box).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+
+import numpy as np
+
+from suctionbench.config import CUP_DEFAULT as CUP
+from suctionbench.contact import swing_path, wrench
+from suctionbench.objects.registry import load_object
+from suctionbench.policies.analytic import random_surface_grasp
+from suctionbench.sim.pick import PickRequest, PickRunner
+
+AGREEMENT = "eval/agreement/agreement.json"
+NOT_EXECUTED = ("unreachable", "collision", "unstable", "no_grasp")
+
+
+def _runner(key: str, seed: int) -> PickRunner:
+    runner = PickRunner(PickRequest(key, policy="random-surface", record=load_object(key)))
+    runner.request.seed = seed
+    runner.reset()
+    return runner
+
+
+def swing(key: str, seed: int) -> None:
+    """Print both models' lift for one trial (module docstring)."""
+    spied: dict = {"wrench": None, "tilts": [], "on": False}
+    through, turned = wrench.swing_through, swing_path._axis_turned
+
+    def spy_through(swing_, arrival, *args, **kwargs):
+        nominal = len(args[2]) == 1  # the nominal label: one grasp, no perturbation samples
+        if nominal:
+            phi_s = swing_.static_tilt()
+            rate, t_off = arrival.lift_off(swing_.n, phi_s, args[1], args[0], args[2])
+            spied["start"] = (math.degrees(phi_s[0]), math.degrees(rate[0]), float(t_off[0]))
+        spied["on"] = nominal
+        out = through(swing_, arrival, *args, **kwargs)
+        spied["on"] = False
+        if nominal:
+            spied["wrench"] = out[0]
+        return out
+
+    def spy_turned(phi):
+        if spied["on"] and len(phi) == 1:
+            spied["tilts"].append(math.degrees(float(np.hypot(*phi[0]))))
+        return turned(phi)
+
+    wrench.swing_through, swing_path._axis_turned = spy_through, spy_turned
+    try:
+        runner = _runner(key, seed)
+        episode, sim = runner.episode, []
+
+        def record(data, cup) -> None:
+            if episode.motion != "lift":
+                return
+            rel = data.site_xmat[episode.tip].reshape(3, 3).T @ data.xmat[episode.object].reshape(3, 3)
+            sim.append((cup.bellows_tilt(data), rel))
+
+        episode.recorder, episode.record_every = record, 1
+        result = runner.run_after_reset()
+    finally:
+        wrench.swing_through, swing_path._axis_turned = through, turned
+    print(f"{key} seed {seed}: simulated {'success' if result['success'] else result['failure']}, "
+          f"label rwr {result['label_rwr']}")
+    if spied["wrench"] is not None:
+        for phase, w in zip(swing_path.PHASES, spied["wrench"], strict=True):
+            a = -w
+            f_n = a[2] + CUP.vacuum_force
+            print(f"  labeller {phase}: moment / ring limit {np.hypot(a[3], a[4]) / (CUP.radius * f_n / 2):.2f}, "
+                  f"shear / mu f_N {np.hypot(a[0], a[1]) / (CUP.friction * f_n):.2f}, "
+                  f"twist / r mu f_N {abs(a[5]) / (CUP.radius * CUP.friction * f_n):.2f}")
+        s = spied["start"]
+        print(f"  labeller lift-off: static tilt {s[0]:.1f} deg, rate {s[1]:.0f} deg/s, {s[2]:.3f} s into the lift; "
+              f"tilt every 40 ms: {np.round(spied['tilts'][::20][:25], 1).tolist()}")
+    if sim:
+        first = sim[0][1]
+        lip = [math.degrees(math.acos(np.clip((np.trace(rel @ first.T) - 1.0) / 2.0, -1.0, 1.0))) for _, rel in sim]
+        print(f"  simulated bellows tilt every 40 ms: {np.round(np.degrees([b for b, _ in sim[::20]]), 1).tolist()}")
+        print(f"  simulated lip tilt every 40 ms:     {np.round(lip[::20], 1).tolist()}")
+
+
+def relabel(out: str, no_sqrt3: bool) -> None:
+    """Relabel the candidate trials (module docstring) and write old and new rwr per trial."""
+    if no_sqrt3:
+        wrench.SQRT3 = 1.0
+    with open(AGREEMENT) as f:
+        trials = json.load(f)["per_trial"]
+    rows = []
+    for t in trials:
+        if not (t["valid"] and t["failure"] not in NOT_EXECUTED and t["label_seal"]
+                and (t["success"] or t["label_rwr"] >= 0.1)):
+            continue
+        runner = _runner(t["object"], int(t["seed"]))
+        mesh, com = runner.posed_object(runner.object_pose())
+        grasp = random_surface_grasp(mesh, int(t["seed"]))
+        labels = runner.label_grasp(grasp.point, grasp.approach, mesh, com)
+        rows.append({"object": t["object"], "seed": t["seed"], "success": t["success"],
+                     "rwr": t["label_rwr"], "relabelled": labels["label_rwr"]})
+    moved = [r for r in rows if abs(r["rwr"] - r["relabelled"]) > 1e-9]
+    hits = sum(r["success"] and r["rwr"] <= 0.5 < r["relabelled"] for r in rows)
+    false = sum(not r["success"] and r["rwr"] <= 0.5 < r["relabelled"] for r in rows)
+    print(f"{len(rows)} trials relabelled, {len(moved)} moved; misses turned hits {hits}, new false positives {false}")
+    with open(out, "w") as f:
+        json.dump(rows, f, indent=1)
+
+
+if __name__ == "__main__":
+    if len(sys.argv) >= 3 and sys.argv[1] == "swing":
+        for arg in sys.argv[2:]:
+            name, seed_text = arg.rsplit(":", 1)
+            swing(name, int(seed_text))
+    elif len(sys.argv) >= 3 and sys.argv[1] == "relabel":
+        relabel(sys.argv[2], "--no-sqrt3" in sys.argv[3:])
+    else:
+        sys.exit(__doc__)

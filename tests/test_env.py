@@ -177,5 +177,6 @@ def test_scene_unstable_after_an_attempt_ends_the_episode_with_the_last_image(mo
 
 def test_the_previous_physics_version_is_refused_with_the_current_id():
     # v0's vacuum was shared among the probe's contacts; its results are not comparable with v1's.
-    with pytest.raises(gymnasium.error.DeprecatedEnv, match="v1"):
+    with pytest.raises(gymnasium.error.DeprecatedEnv, match="v1"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)  # gymnasium warns as well as raising
         gymnasium.make("suctionbench/SuctionPick-v0")

@@ -63,7 +63,7 @@ def test_transport_swing_against_an_accurate_integration(duration):
     # centre of mass below the lip, I about the lip centre, with a tight-tolerance Runge-Kutta
     # through the transport and the hold; its largest tilt sets the largest return R, which the
     # lip carries at the carry's worst instant (lossless: the swing turns there, at rest). The
-    # 2 ms implicit step must agree within 3 %.
+    # 2 ms semi-implicit (symplectic Euler) step must agree within 3 %.
     cup = dataclasses.replace(CUP_DEFAULT, bellows_loss_factor=0.0)
     mass, a_peak, hold = 0.2, 3.1, 0.5
     swing, _, (_, carry) = _cube(mass, np.zeros((1, 3)), a_peak, duration, cup, hold=hold)

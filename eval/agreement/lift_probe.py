@@ -23,12 +23,12 @@ import numpy as np
 
 from suctionbench.config import CUP_DEFAULT as CUP
 from suctionbench.contact import swing_path, wrench
+from suctionbench.evaluation.agreement import NOT_EXECUTED
 from suctionbench.objects.registry import load_object
 from suctionbench.policies.analytic import random_surface_grasp
 from suctionbench.sim.pick import PickRequest, PickRunner
 
 AGREEMENT = "eval/agreement/agreement.json"
-NOT_EXECUTED = ("unreachable", "collision", "unstable", "no_grasp")
 
 
 def _runner(key: str, seed: int) -> PickRunner:

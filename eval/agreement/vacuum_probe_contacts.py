@@ -13,10 +13,9 @@ import sys
 
 import numpy as np
 
+from suctionbench.evaluation.agreement import NOT_EXECUTED
 from suctionbench.objects.registry import load_object
 from suctionbench.sim.pick import PickRequest, PickRunner
-
-NOT_EXECUTED = {"unreachable", "no_grasp", "collision", "unstable"}
 
 
 def _recorder(episode, info):

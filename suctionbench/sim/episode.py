@@ -392,22 +392,16 @@ class PickEpisode:
         return out
 
     def _tip_at(self, q: np.ndarray) -> np.ndarray:
-        """Where the arm configuration `q` puts the tool tip with the cup unloaded (the IK model)."""
-        return self._tips_at(np.asarray(q)[None])[0]
-
-    def _tips_at(self, qs: np.ndarray) -> np.ndarray:
-        """(T, 3) tool tips of the arm configurations `qs` (T, 7), as `_tip_at`; the IK model's state
-        is restored once at the end."""
+        """Where the arm configuration `q` puts the tool tip with the cup unloaded (the IK model,
+        whose state is restored)."""
         d = self.data_ik
         saved = d.qpos.copy()
-        tips = np.empty((len(qs), 3))
-        for i, q in enumerate(qs):
-            d.qpos[self.arm_qpos] = q
-            mujoco.mj_kinematics(self.model, d)
-            tips[i] = d.site_xpos[self.tip]
+        d.qpos[self.arm_qpos] = q
+        mujoco.mj_kinematics(self.model, d)
+        tip = d.site_xpos[self.tip].copy()
         d.qpos[:] = saved
         mujoco.mj_kinematics(self.model, d)
-        return tips
+        return tip
 
     def _carry_time(self, waypoints: np.ndarray, length: float) -> float:
         """Duration of a straight min-jerk move of `length` metres through joint `waypoints`: the
@@ -483,7 +477,8 @@ class PickEpisode:
                           constant_speed=True)
             self.watch_collisions = False
             q_contact = d.qpos[self.arm_qpos].copy()
-            touchdown_short = float((point - self._tip_at(q_contact)) @ approach)
+            tip_contact = self._tip_at(q_contact)  # the commanded tip: the IK model's unloaded cup
+            touchdown_short = float((point - tip_contact) @ approach)
             self.cup.commanded = True
             self._run(np.array([q_contact, q_contact]), c.vacuum_dwell)
             if self.cup.sealed < 0 or not self._take_seal(self.cup.sealed):
@@ -494,8 +489,7 @@ class PickEpisode:
             # The lift starts where the arm is: from the commanded tip at q_contact (the IK model's
             # unloaded cup), not from the loaded cup's tip, which the bellows has moved by its
             # compression (a step of several mm in the first set point otherwise).
-            tip_now = self._tip_at(q_contact)
-            path_up = self._line(tip_now, tip_now + (lift_end - point), approach, q_contact)
+            path_up = self._line(tip_contact, tip_contact + (lift_end - point), approach, q_contact)
             self._motion, self._tool_path["lift"] = "lift", []
             lost = self._follow_holding(path_up, c.lift_height / c.lift_speed, grip)
             self._motion = None

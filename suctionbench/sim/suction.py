@@ -82,8 +82,10 @@ class SuctionController:
         self._ray_dist = np.zeros(k)
         self._ray_normal = np.zeros((k, 3))
         self._axis_geom = np.zeros(1, dtype=np.int32)
-        self._muted = np.zeros(model.ngeom, dtype=bool)
-        """Geoms whose vacuum bit `_aim_vacuum` has taken (to give back on `release`)."""
+        self._receiver = -1
+        """The geom the vacuum probe alone may touch (`_aim_vacuum`; -1: every exposed part)."""
+        self._muted = np.zeros(0, dtype=int)
+        """Geoms whose vacuum bit `_aim_vacuum` has taken for `_receiver` (given back by `_unmute`)."""
         self._fold_weights = _periodic_interpolation(self._phi, n) if n else np.zeros((k, 0))
         """(k, n): the lip's fold at each leak-test place, linear between its points round the circle."""
 
@@ -205,22 +207,22 @@ class SuctionController:
             hit = int(self._axis_geom[0])
             if hit >= 0 and self.model.geom_bodyid[hit] == self.candidate:
                 receiver = hit
+        if receiver == self._receiver:  # the usual case while the cup holds: nothing to change
+            return
+        self._unmute()
         if receiver < 0:
-            self._unmute()
             return
         affinity = self.model.geom_conaffinity
-        exposed = (affinity & VACUUM_CONTYPE) != 0
-        exposed[receiver] = False
-        affinity[exposed] &= ~VACUUM_CONTYPE
-        self._muted |= exposed
-        affinity[receiver] |= VACUUM_CONTYPE
-        self._muted[receiver] = False
+        self._muted = np.flatnonzero(affinity & VACUUM_CONTYPE)
+        self._muted = self._muted[self._muted != receiver]
+        affinity[self._muted] &= ~VACUUM_CONTYPE
+        self._receiver = receiver
 
     def _unmute(self) -> None:
         """Give the vacuum bit back to every part `_aim_vacuum` took it from."""
-        if self._muted.any():
+        if self._receiver >= 0:
             self.model.geom_conaffinity[self._muted] |= VACUUM_CONTYPE
-            self._muted[:] = False
+            self._receiver, self._muted = -1, self._muted[:0]
 
     def _apex(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
         """The bellows' rotation and the leak test's ray apex on its axis, `ray_apex_height` behind

@@ -4,6 +4,7 @@ Each case against a hand derivation of the rigid body on the table."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -154,3 +155,28 @@ def test_the_press_acts_where_the_lip_lands_not_at_a_target_behind_a_surface():
     crown = -0.022 * out[0]
     assert np.linalg.norm(seal.ring_centre[0] - crown) < 2e-3  # where the lip lands (less its sag)
     assert not labeller.stays_put(target, approach)[0]
+
+
+def test_the_perturbed_presses_act_where_each_lip_lands():
+    # The robust label's samples press where each perturbed lip lands, as the nominal label does.
+    # A target inside the lying tube's bore and the crown point on the same approach line are one
+    # grasp: the seal model casts from outside the object, so both land the lip on the crown; the
+    # samples are drawn in the nominal contact frame from the same (seed, grasp id) stream, so each
+    # pair of samples shifts both lines alike and lands where the other does (the approach's own
+    # rotation is left out: it turns each line about its own target, 41 mm apart along it, and so
+    # would move the two lips apart). Their robust labels are therefore equal, sample by sample.
+    # Pressed at the bore's targets instead, every sample rolls the tube away (the nominal case
+    # above) and the bore grasp scored 0.
+    outer = trimesh.creation.cylinder(radius=0.022, height=0.22, sections=64)
+    inner = trimesh.creation.cylinder(radius=0.019, height=0.24, sections=64)
+    tube = outer.difference(inner)
+    tube.apply_transform(trimesh.transformations.rotation_matrix(math.pi / 2, [0, 1, 0]))
+    a = math.radians(30.0)
+    out = np.array([[0.0, -math.sin(a), -math.cos(a)]])
+    config = LabelConfig.for_episode(CUP_DEFAULT)
+    config = replace(config, perturbation=replace(config.perturbation, approach_rotation_std=0.0))
+    labeller = SuctionLabeller(tube, config, mass=0.064)
+    bore, bore_samples = labeller.robust(0.019 * out, out, seed=3, grasp_ids=np.array([0]))
+    crown, crown_samples = labeller.robust(-0.022 * out, out, seed=3, grasp_ids=np.array([0]))
+    assert crown[0] > 0.0  # some samples hold: the equality below is not two zeros
+    np.testing.assert_array_equal(bore_samples, crown_samples)

@@ -250,24 +250,30 @@ def sample_perturbations(
     )
 
 
-def evaluate_samples(seal: SealModel, samples: GraspSamples, cases: list[Arrival] | None = None) -> np.ndarray:
-    """Fast path: bool (N*J,) seal-and-resist per sample, staged so rays are cast only where needed.
-    `cases`: each load case's arrival (`arrivals`), None for the step bound."""
+def evaluate_samples(seal: SealModel, samples: GraspSamples, cases: list[Arrival] | None = None
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Fast path: bool (N*J,) seal-and-resist per sample, staged so rays are cast only where needed,
+    and (N*J, 3) where each sample's lip lands (its ring centre where the seal got as far as the
+    wrench test, else its target point). `cases`: each load case's arrival (`arrivals`), None for
+    the step bound."""
     out = np.zeros(len(samples.points), dtype=bool)
+    landed = samples.points.copy()
     cup = seal.cup
     for start in range(0, len(out), CHUNK_SAMPLES):
         sl = slice(start, start + CHUNK_SAMPLES)
         chunk = None if cases is None else [case.take(sl) for case in cases]
-        gate = _wrench_gate(samples.loads[sl], samples.com[sl], samples.frames[sl], samples.friction[sl], cup, chunk)
+        gate = _wrench_gate(samples.loads[sl], samples.com[sl], samples.frames[sl], samples.friction[sl], cup, chunk,
+                            landed[sl])
         out[sl] = seal.evaluate(samples.points[sl], samples.frames[sl], gate=gate)
-    return out
+    return out, landed
 
 
 def _wrench_gate(loads: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.ndarray, cup: CupConfig,
-                 cases: list[Arrival] | None = None):
+                 cases: list[Arrival] | None = None, landed: np.ndarray | None = None):
     """The closed-form wrench test of every load case as a seal-model gate: it only needs the ring
     centres, the vacuum force and the lip's profile. The seal model asks twice (seal.Gate) with
-    the same ring centres, so each sample's swung wrench is computed once and kept."""
+    the same ring centres, so each sample's swung wrench is computed once and kept, and its ring
+    centre written to `landed` (a view of the caller's array), where the touch-down presses."""
     wrenches = np.full((len(loads), loads.shape[1], 6), np.nan)
     known = np.zeros(len(loads), dtype=bool)
 
@@ -280,6 +286,8 @@ def _wrench_gate(loads: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.
         wrenches[todo] = lip_loads(loads[todo], com[todo], at, frames[todo], cup,
                                    None if cases is None else [case.take(todo) for case in cases])
         known[todo] = True
+        if landed is not None:
+            landed[todo] = at
         ok = np.ones(len(idx), dtype=bool)
         for case in range(loads.shape[1]):
             ok &= resists(wrenches[idx, case], mu[idx], cup, vacuum, lip_heights, rim_bound=rim_bound)
@@ -289,16 +297,18 @@ def _wrench_gate(loads: np.ndarray, com: np.ndarray, frames: np.ndarray, mu: np.
 
 
 def evaluate_samples_reference(seal: SealModel, samples: GraspSamples, cases: list[Arrival] | None = None
-                               ) -> np.ndarray:
+                               ) -> tuple[np.ndarray, np.ndarray]:
     """Reference path: per sample, one full seal evaluation and one cone program per load case,
-    in a Python loop."""
+    in a Python loop; with where each sealed sample's lip lands (as `evaluate_samples`)."""
     out = np.zeros(len(samples.points), dtype=bool)
+    landed = samples.points.copy()
     loads = samples.loads
     for i in range(len(out)):
         result = seal.evaluate(samples.points[i : i + 1], samples.frames[i : i + 1])
         if not result.seal[0]:
             continue
         centre, frame = result.ring_centre[0], samples.frames[i]
+        landed[i] = centre
         wrenches = lip_loads(loads[i : i + 1], samples.com[i][None], centre[None], frame[None], seal.cup,
                              None if cases is None else [case.take(slice(i, i + 1)) for case in cases])[0]
         out[i] = all(
@@ -310,7 +320,7 @@ def evaluate_samples_reference(seal: SealModel, samples: GraspSamples, cases: li
             )[0]
             for wrench in wrenches
         )
-    return out
+    return out, landed
 
 
 def robust_wrench_resistance(
@@ -340,15 +350,17 @@ def robust_wrench_resistance(
         sl = slice(start, start + step)
         samples = sample_perturbations(points[sl], frames[sl], obj, seal.cup, config, seed, ids[sl])
         cases = arrivals(obj, config, seal.cup, samples.force, samples.inertial, samples.transport_time)
-        ok = run(seal, samples, cases)
+        ok, landed = run(seal, samples, cases)
         if obj.footprint is not None and config.press_compression > 0.0:
             # The object rests on its footprint when pressed: its weight and centre of mass are
             # the nominal ones, which that footprint carries. A perturbed rotation or centre of
             # mass on the same footprint is a state no object at rest is in (a box tilted 0.1 rad
             # on its face, a lying cylinder's centre of mass beside its support line): the table
             # would turn it back. What the perturbation moves for this test is the grasp relative
-            # to the object (samples.points, samples.frames) and the lip's friction.
-            ok &= stays_put(samples.points, samples.frames[:, :, 2], obj.com, obj.gravity_force,
+            # to the object (samples.frames, and where each lip lands: its ring centre, not a
+            # target behind the surface it meets first, as the nominal label has it) and the
+            # lip's friction.
+            ok &= stays_put(landed, samples.frames[:, :, 2], obj.com, obj.gravity_force,
                             seal.cup.axial_stiffness * config.press_compression, samples.friction,
                             config.table_friction, obj.footprint)
         outcomes[sl] = ok.reshape(-1, j)

@@ -1,0 +1,185 @@
+"""Probes behind eval/README.md, agreement "Now: the perturbed samples press where each lip lands".
+
+Usage:
+  python eval/agreement/label_probe.py samples OBJECT:SEED [OBJECT:SEED ...]
+      the robust label of an agreement trial taken apart: the share of its perturbed samples that
+      seal, that seal and resist every load case, and that leave the object put under the press.
+  python eval/agreement/label_probe.py lip [FIELD=VALUE,...|-] OBJECT:SEED [OBJECT:SEED ...]
+      the simulated trial (SimCupConfig fields overridden, e.g. lip_armature=0.05) and the second
+      harmonic of its lip points' folds at the lift's start and peak: the profile the lip's springs
+      feel, to compare with the labeller's lip heights (seal model, thin lip at the cup radius).
+  python eval/agreement/label_probe.py peel
+      the quasi-static peel criterion with the labeller's spring ring (48 places of rate K / 48, a
+      lifted place leaking its gap x arc, the ejector's vacuum): the largest tilting moment a flat
+      face and lying cylinders hold with and without the lifted lip's leak.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+
+import numpy as np
+
+from suctionbench.config import CUP_DEFAULT
+from suctionbench.contact import robust, wrench
+from suctionbench.objects.registry import load_object
+from suctionbench.policies.analytic import random_surface_grasp
+from suctionbench.sim.cup import SIM_CUP_DEFAULT
+from suctionbench.sim.pick import PickRequest, PickRunner
+from suctionbench.vacuum import vacuum_force
+
+
+def _runner(key: str, seed: int, sim_cup=SIM_CUP_DEFAULT) -> PickRunner:
+    runner = PickRunner(PickRequest(key, policy="random-surface", record=load_object(key), sim_cup=sim_cup))
+    runner.request.seed = seed
+    runner.reset()
+    return runner
+
+
+def samples(key: str, seed: int) -> None:
+    """Print the robust label's samples taken apart (module docstring)."""
+    seen: dict = {}
+    evaluate, stays = robust.evaluate_samples, robust.stays_put
+
+    def spy_evaluate(seal, grasps, cases):
+        ok, landed = evaluate(seal, grasps, cases)
+        seen["seal"] = seal.evaluate(grasps.points, grasps.frames).seal
+        seen["resists"] = ok
+        return ok, landed
+
+    def spy_stays(*args, **kwargs):
+        seen["stays"] = stays(*args, **kwargs)
+        return seen["stays"]
+
+    robust.evaluate_samples, robust.stays_put = spy_evaluate, spy_stays
+    try:
+        runner = _runner(key, seed)
+        mesh, com = runner.posed_object(runner.object_pose())
+        grasp = random_surface_grasp(mesh, seed)
+        labels = runner.label_grasp(grasp.point, grasp.approach, mesh, com)
+    finally:
+        robust.evaluate_samples, robust.stays_put = evaluate, stays
+    put = seen.get("stays")
+    print(f"{key} seed {seed}: seal {labels['label_seal']} ({labels['label_seal_failure']}), nominal "
+          f"{labels['label_wr']}, rwr {labels['label_rwr']}; samples: seal {seen['seal'].mean():.2f}, seal and "
+          f"resist {seen['resists'].mean():.2f}, stay put {'-' if put is None else f'{put.mean():.2f}'}")
+
+
+def lip(overrides: str, key: str, seed: int) -> None:
+    """Print the simulated lip's fold harmonics (module docstring)."""
+    fields = {} if overrides == "-" else dict(kv.split("=") for kv in overrides.split(","))
+    sim_cup = dataclasses.replace(SIM_CUP_DEFAULT, **{k: float(v) for k, v in fields.items()})
+    runner = _runner(key, seed, sim_cup)
+    episode = runner.episode
+    cup_state, cup = episode.cup, episode.cup.cup
+    k = cup_state.sim.lip_point_stiffness(cup)
+    theta = wrench.lip_angles(len(cup_state.lip_qpos))
+    basis = np.column_stack([np.ones_like(theta), np.cos(theta), np.sin(theta)])
+    steps: list = []
+
+    def record(data, controller) -> None:
+        if episode.motion == "lift":
+            push = -k * data.qpos[controller.lip_qpos]
+            moment = cup.radius * math.hypot((push * np.sin(theta)).sum(), (push * np.cos(theta)).sum())
+            steps.append((moment / (0.5 * cup.radius * push.sum()), moment, -data.qpos[controller.lip_qpos].copy(),
+                          controller.leak_area, controller.vacuum(data)))
+
+    episode.recorder, episode.record_every = record, 1
+    result = runner.run_after_reset()
+    print(f"{key} seed {seed} ({overrides}): simulated {'success' if result['success'] else result['failure']}")
+    if len(steps) > 5:
+        for name, step in (("lift start", steps[5]), ("lift peak", max(steps, key=lambda s: s[0]))):
+            fold = step[2]
+            rest = fold - basis @ np.linalg.lstsq(basis, fold, rcond=None)[0]
+            second = 2.0 * abs(np.mean(rest * np.exp(2j * theta)))
+            print(f"  {name}: moment {1e3 * step[1]:.1f} mN m ({step[0]:.2f} of the flat ring limit), "
+                  f"second harmonic of the folds {1e3 * second:.2f} mm, points at free length "
+                  f"{int((fold < 1e-5).sum())}, leak {1e6 * step[3]:.2f} mm^2, vacuum {step[4]:.3f}")
+
+
+PLACES = 48
+
+
+def _lip_gaps(normal: float, torque: np.ndarray, heights: np.ndarray, cup) -> np.ndarray:
+    """Each place's compression (m, negative: lifted) of the spring ring carrying the normal force
+    and the tilting torque (tau_x, tau_y), on a profile `heights`: Newton on the convex potential
+    sum (K / 2n) max(c, 0)^2 - u . w, c = u . b - z, whose gradient is the force balance."""
+    theta = wrench.lip_angles(PLACES)
+    basis = np.column_stack([np.ones(PLACES), np.cos(theta), np.sin(theta)])
+    rate, r = cup.lip_rate / PLACES, cup.radius
+    target = np.array([normal, -torque[1] / r, torque[0] / r])
+    u = np.array([normal / cup.lip_rate, -2 * torque[1] / (cup.lip_rate * r), 2 * torque[0] / (cup.lip_rate * r)])
+
+    def potential(v):
+        return 0.5 * rate * np.sum(np.maximum(basis @ v - heights, 0.0) ** 2) - v @ target
+
+    for _ in range(200):
+        c = basis @ u - heights
+        grad = basis.T @ (rate * np.maximum(c, 0.0)) - target
+        if np.abs(grad).max() < 1e-10:
+            break
+        on = c > 0.0
+        step = np.linalg.solve(rate * basis[on].T @ basis[on] + 1e-9 * np.eye(3), -grad)
+        t = 1.0
+        while potential(u + t * step) > potential(u) + 1e-4 * t * (grad @ step) and t > 1e-10:
+            t *= 0.5
+        u = u + t * step
+    return basis @ u - heights
+
+
+def _holds(pull: float, torque: np.ndarray, heights: np.ndarray, cup, leaking: bool) -> bool:
+    """Whether the lip holds: without `leaking`, no place lifts (p >= 0); with it, the largest
+    equilibrium of lip and vacuum (monotone iteration down from the full vacuum) keeps the vacuum
+    above the part-present switch."""
+    v = cup.vacuum_force
+    arc = 2.0 * math.pi * cup.radius / PLACES
+    for _ in range(300):
+        normal = v - pull
+        if np.hypot(*torque) >= cup.radius * normal * 0.999:
+            return False
+        c = _lip_gaps(normal, torque, heights, cup)
+        if not leaking:
+            return bool(c.min() >= -1e-12)
+        new = float(vacuum_force(arc * np.maximum(-c, 0.0).sum(), cup))
+        if abs(new - v) < 1e-10:
+            break
+        v = new
+    return v >= cup.vacuum_switch_fraction * cup.vacuum_force
+
+
+def peel() -> None:
+    """Print the largest moment held with and without the lifted lip's leak (module docstring)."""
+    cup, pull = CUP_DEFAULT, 0.6
+    theta = wrench.lip_angles(PLACES)
+    limit = 0.5e3 * cup.radius * (cup.vacuum_force - pull)
+    print(f"pull {pull} N, flat ring limit r (V - pull) / 2 = {limit:.2f} mN m")
+    for radius in (math.inf, 0.05, 0.03, 0.022):
+        heights = -(cup.radius**2 / (4.0 * radius)) * np.cos(2.0 * theta)
+        for bearing in (0.0, 90.0):
+            direction = np.array([math.cos(math.radians(bearing)), math.sin(math.radians(bearing))])
+            found = []
+            for leaking in (False, True):
+                low, high = 0.0, cup.radius * (cup.vacuum_force - pull)
+                for _ in range(40):
+                    mid = 0.5 * (low + high)
+                    low, high = (mid, high) if _holds(pull, mid * direction, heights, cup, leaking) else (low, mid)
+                found.append(low)
+            print(f"  cylinder R {radius * 1e3:.0f} mm, torque at {bearing:.0f} deg: {found[0] * 1e3:.2f} mN m "
+                  f"without the lifted lip's leak, {found[1] * 1e3:.2f} with it ({found[1] / found[0]:.4f}x)")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) >= 3 and sys.argv[1] == "samples":
+        for arg in sys.argv[2:]:
+            name, text = arg.rsplit(":", 1)
+            samples(name, int(text))
+    elif len(sys.argv) >= 4 and sys.argv[1] == "lip":
+        for arg in sys.argv[3:]:
+            name, text = arg.rsplit(":", 1)
+            lip(sys.argv[2], name, int(text))
+    elif len(sys.argv) == 2 and sys.argv[1] == "peel":
+        peel()
+    else:
+        sys.exit(__doc__)

@@ -12,6 +12,11 @@ Usage:
       the quasi-static peel criterion with the labeller's spring ring (48 places of rate K / 48, a
       lifted place leaking its gap x arc, the ejector's vacuum): the largest tilting moment a flat
       face and lying cylinders hold with and without the lifted lip's leak.
+  python eval/agreement/label_probe.py ring NORMAL_N PLACES BEARING_DEG AMPLITUDE_MM [...]
+      the largest tilting moment (its torque vector at BEARING_DEG from the contact frame's x axis)
+      a spring ring of PLACES places carries under the normal force NORMAL_N without lifting
+      anywhere, on a lying cylinder's profile -a cos(2 theta) of second harmonic a = AMPLITUDE_MM:
+      the labeller's lip (48 places, the seal model's profile) beside the simulated one (16 points).
 """
 
 from __future__ import annotations
@@ -90,25 +95,31 @@ def lip(overrides: str, key: str, seed: int) -> None:
     result = runner.run_after_reset()
     print(f"{key} seed {seed} ({overrides}): simulated {'success' if result['success'] else result['failure']}")
     if len(steps) > 5:
+
+        def harmonics(fold):
+            first = np.linalg.lstsq(basis, fold, rcond=None)[0]
+            return first, 2.0 * np.mean((fold - basis @ first) * np.exp(2j * theta))
+
+        axis = 0.5 * np.angle(harmonics(steps[5][2])[1])  # the profile's most folded (axis-wise) bearing
         for name, step in (("lift start", steps[5]), ("lift peak", max(steps, key=lambda s: s[0]))):
-            fold = step[2]
-            rest = fold - basis @ np.linalg.lstsq(basis, fold, rcond=None)[0]
-            second = 2.0 * abs(np.mean(rest * np.exp(2j * theta)))
-            print(f"  {name}: moment {1e3 * step[1]:.1f} mN m ({step[0]:.2f} of the flat ring limit), "
-                  f"second harmonic of the folds {1e3 * second:.2f} mm, points at free length "
-                  f"{int((fold < 1e-5).sum())}, leak {1e6 * step[3]:.2f} mm^2, vacuum {step[4]:.3f}")
+            first, harmonic = harmonics(step[2])
+            bearing = math.degrees(math.atan2(-first[1], first[2]) - axis) % 360.0  # tau = pi r (p_y, -p_x)
+            print(f"  {name}: moment {1e3 * step[1]:.1f} mN m ({step[0]:.2f} of the flat ring limit) at "
+                  f"{bearing:.0f} deg from the axis-wise side, folds' second harmonic {1e3 * abs(harmonic):.2f} mm, "
+                  f"points at free length {int((step[2] < 1e-5).sum())}, leak {1e6 * step[3]:.2f} mm^2, "
+                  f"vacuum {step[4]:.3f}")
 
 
 PLACES = 48
 
 
-def _lip_gaps(normal: float, torque: np.ndarray, heights: np.ndarray, cup) -> np.ndarray:
+def _lip_gaps(normal: float, torque: np.ndarray, heights: np.ndarray, cup, places: int = PLACES) -> np.ndarray:
     """Each place's compression (m, negative: lifted) of the spring ring carrying the normal force
     and the tilting torque (tau_x, tau_y), on a profile `heights`: Newton on the convex potential
     sum (K / 2n) max(c, 0)^2 - u . w, c = u . b - z, whose gradient is the force balance."""
-    theta = wrench.lip_angles(PLACES)
-    basis = np.column_stack([np.ones(PLACES), np.cos(theta), np.sin(theta)])
-    rate, r = cup.lip_rate / PLACES, cup.radius
+    theta = wrench.lip_angles(places)
+    basis = np.column_stack([np.ones(places), np.cos(theta), np.sin(theta)])
+    rate, r = cup.lip_rate / places, cup.radius
     target = np.array([normal, -torque[1] / r, torque[0] / r])
     u = np.array([normal / cup.lip_rate, -2 * torque[1] / (cup.lip_rate * r), 2 * torque[0] / (cup.lip_rate * r)])
 
@@ -139,7 +150,7 @@ def _holds(pull: float, torque: np.ndarray, heights: np.ndarray, cup, leaking: b
         normal = v - pull
         if np.hypot(*torque) >= cup.radius * normal * 0.999:
             return False
-        c = _lip_gaps(normal, torque, heights, cup)
+        c = _lip_gaps(normal, torque, heights, cup, len(heights))
         if not leaking:
             return bool(c.min() >= -1e-12)
         new = float(vacuum_force(arc * np.maximum(-c, 0.0).sum(), cup))
@@ -170,6 +181,22 @@ def peel() -> None:
                   f"without the lifted lip's leak, {found[1] * 1e3:.2f} with it ({found[1] / found[0]:.4f}x)")
 
 
+def ring(normal: float, places: int, bearing: float, amplitudes: list[float]) -> None:
+    """Print the spring ring's lift-free moment on lying cylinders' profiles (module docstring)."""
+    cup = CUP_DEFAULT
+    theta = wrench.lip_angles(places)
+    direction = np.array([math.cos(math.radians(bearing)), math.sin(math.radians(bearing))])
+    for amplitude in amplitudes:
+        heights = -1e-3 * amplitude * np.cos(2.0 * theta)
+        low, high = 0.0, cup.radius * normal
+        for _ in range(40):
+            mid = 0.5 * (low + high)
+            lifted = _lip_gaps(normal, mid * direction, heights, cup, places).min() < -1e-12
+            low, high = (low, mid) if lifted else (mid, high)
+        print(f"{places} places, normal force {normal} N, torque at {bearing} deg, profile {amplitude} mm: "
+              f"{low * 1e3:.2f} mN m")
+
+
 if __name__ == "__main__":
     if len(sys.argv) >= 3 and sys.argv[1] == "samples":
         for arg in sys.argv[2:]:
@@ -181,5 +208,7 @@ if __name__ == "__main__":
             lip(sys.argv[2], name, int(text))
     elif len(sys.argv) == 2 and sys.argv[1] == "peel":
         peel()
+    elif len(sys.argv) >= 6 and sys.argv[1] == "ring":
+        ring(float(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4]), [float(a) for a in sys.argv[5:]])
     else:
         sys.exit(__doc__)

@@ -53,7 +53,8 @@ class SimCupConfig:
     """The compliant, leak-aware cup. False: the rigid reference cup (see `rigid()`)."""
 
     lip_points: int = 16
-    """Lip points, each on its own sprung axial slide (>= 16: 2.9 mm apart on the 47 mm lip)."""
+    """Lip points, each on its own sprung axial slide (>= 16: 2.9 mm apart on the 47 mm lip, so the
+    1.5 mm spheres form a nearly closed rim)."""
 
     leak_samples: int = 48
     """Places round the lip circle where the leak test measures the gap (0.98 mm apart on the 15 mm
@@ -66,14 +67,10 @@ class SimCupConfig:
     """Radius of the rigid tool shaft between flange and bellows."""
 
     lip_sphere_radius: float = 0.001
-    """Radius of each lip sphere (the lip's rounded edge). Small, because the lip it stands for is
-    thin: a sphere resting on a slope touches it inside the lip circle (by rho sin(slope)), and on a
-    convex face its centre follows the surface offset by rho + contact_margin, so the lip feels a
-    flatter face than the thin lip does (its profile's second harmonic r^2 / 4 (R + rho + margin)
-    instead of r^2 / 4 R on a cylinder of radius R: 5 % less on a 22 mm cylinder at 1 mm and a
-    0.25 mm margin). Not smaller: 0.5 mm spheres caught in a 2 mm groove across a face and lifted
-    the box with no seal (tests/test_cup_physics.py, the groove at 11.25 deg); 1 mm ones 2.9 mm
-    apart do not."""
+    """Radius of each lip sphere (the lip's rounded edge). Small, because a sphere resting on a
+    slope touches it inside the lip circle (by rho sin(slope): 0.6 mm on a 38 deg slope), which
+    shortens the lip's effective radius on curved surfaces; 1 mm spheres 2.9 mm apart still form
+    a rim that nothing the objects have reaches between."""
 
     axial_damping: float = 30.0
     """Bellows axial damping (N s/m): about 1.5 x critical for the lip plus a light object (lossy
@@ -126,18 +123,12 @@ class SimCupConfig:
     (the light lip points between two stiff constraints), which also lets it walk sideways under
     the lip; at 2 it rests still, 0.1 mm into the lip's margin."""
 
-    contact_solimp: tuple[float, float, float] = (0.99, 0.999, 0.0005)
-    """MuJoCo solimp of lip contacts (impedance rising from 0.99 to 0.999 within 0.5 mm). The
-    contact is a soft constraint in series with each lip point's spring; it must be far stiffer,
-    or the lip's loaded points sink further into their margin than the unloaded ones and the lip
-    conforms to less of the face than its springs say. At (0.95, 0.99) the points on a 22 mm
-    cylinder rested 0.36-0.46 mm from it for 0.69-0.14 N (a contact ~10x as stiff as the 498 N/m
-    point), losing ~10 % of the profile's second harmonic; at (0.99, 0.999) 0.47-0.50 mm, ~2 %."""
+    contact_solimp: tuple[float, float, float] = (0.95, 0.99, 0.0005)
+    """MuJoCo solimp of lip contacts (impedance rising to 0.99 within 0.5 mm)."""
 
-    contact_margin: float = 0.00025
+    contact_margin: float = 0.0005
     """MuJoCo margin of the lip spheres (m): a pressed lip point rests this far from the object's
-    collision surface. The leak test measures gaps from this resting distance. Small for the same
-    reason as the spheres (it adds to their offset on a convex face)."""
+    collision surface. The leak test measures gaps from this resting distance."""
 
     contact_gap: float = 0.001
     """MuJoCo gap of the lip spheres (m): contacts exist (inactive for the solver) up to this far

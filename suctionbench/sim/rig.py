@@ -57,9 +57,6 @@ class RigResult:
     """Bellows tilt (rad) at the end of the dwell."""
     gaps: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     """Lip gaps (m) at the end of the dwell."""
-    folds: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
-    """How far each lip point is folded (m, positive toward the cup) at the end of the dwell, in the
-    order of the points round the lip (`lip_angles`)."""
     peak_acceleration: float = 0.0
     """Largest acceleration (m/s^2) of the carriage during the lift."""
     peak_gravity_torque: float = 0.0
@@ -208,7 +205,6 @@ class CupRig:
         gaps = self.cup.lip_gaps(d, self.object) if self.cup.candidate == self.object else np.zeros(0)
         sealed = self.cup.sealed == self.object
         leak, vacuum = self.cup.leak_area, self.cup.vacuum(d)
-        folds = -d.qpos[self.cup.lip_qpos]
         tilt = float(np.hypot(*[d.qpos[m.joint(f"cup_tilt_{a}").qposadr[0]] for a in "xy"]))
         z0 = d.xipos[self.object][2]
         steps = int(lift_time / dt)
@@ -234,7 +230,7 @@ class CupRig:
         return RigResult(
             sealed=sealed, held=self.cup.sealed == self.object,
             lifted=bool(d.xipos[self.object][2] - z0 > 0.5 * lift), leak_area=leak, vacuum=vacuum,
-            compression=compression, tilt=tilt, gaps=gaps, folds=folds, peak_acceleration=float(np.max(acc)),
+            compression=compression, tilt=tilt, gaps=gaps, peak_acceleration=float(np.max(acc)),
             peak_gravity_torque=torque[0], tilt_hanging=torque[1],
         )
 

@@ -8,6 +8,11 @@ Usage:
       the simulated trial (SimCupConfig fields overridden, e.g. lip_armature=0.05) and the second
       harmonic of its lip points' folds at the lift's start and peak: the profile the lip's springs
       feel, to compare with the labeller's lip heights (seal model, thin lip at the cup radius).
+  python eval/agreement/label_probe.py conform RADIUS_MM [FIELD=VALUE,...|-]
+      the cup rig (suctionbench.sim.rig) pressed on a lying cylinder (a MuJoCo primitive): the
+      second harmonic of the lip points' folds at the end of the vacuum's dwell, beside the thin
+      lip's profile h(t) = R - sqrt(R^2 - r^2 sin^2 t) (SimCupConfig fields overridden as for lip;
+      a tuple's items separated by ';', e.g. contact_solimp=0.99;0.999;0.0005).
   python eval/agreement/label_probe.py peel
       the quasi-static peel criterion with the labeller's spring ring (48 places of rate K / 48, a
       lifted place leaking its gap x arc, the ejector's vacuum): the largest tilting moment a flat
@@ -72,11 +77,55 @@ def samples(key: str, seed: int) -> None:
           f"resist {seen['resists'].mean():.2f}, stay put {'-' if put is None else f'{put.mean():.2f}'}")
 
 
+def _sim_cup(overrides: str):
+    """SIM_CUP_DEFAULT with FIELD=VALUE overrides ("-": none; a tuple's items separated by ';')."""
+    fields = {} if overrides == "-" else dict(kv.split("=") for kv in overrides.split(","))
+
+    def value(text: str):
+        if ";" in text:
+            return tuple(float(x) for x in text.split(";"))
+        return int(text) if text.isdigit() else float(text)
+
+    return dataclasses.replace(SIM_CUP_DEFAULT, **{k: value(v) for k, v in fields.items()})
+
+
+def _second_harmonic(folds: np.ndarray) -> complex:
+    """The second harmonic (complex amplitude, m) of folds at evenly spaced places round the lip,
+    what is left once the mean and the first harmonic (the bellows' plane) are taken out."""
+    theta = wrench.lip_angles(len(folds))
+    basis = np.column_stack([np.ones_like(theta), np.cos(theta), np.sin(theta)])
+    rest = folds - basis @ np.linalg.lstsq(basis, folds, rcond=None)[0]
+    return 2.0 * np.mean(rest * np.exp(2j * theta))
+
+
+def conform(radius_mm: float, overrides: str) -> None:
+    """Print the rig's lip folds on a lying cylinder against the thin lip (module docstring)."""
+    sys.path.insert(0, "tests")
+    from test_cup_physics import lying_cylinder  # the physics tests' cylinder
+
+    from suctionbench.sim.rig import CupRig
+
+    radius = 1e-3 * radius_mm
+    t = np.linspace(0.0, 2.0 * math.pi, 3600, endpoint=False)
+    thin = abs(2.0 * np.mean((radius - np.sqrt(radius**2 - (CUP_DEFAULT.radius * np.sin(t)) ** 2)) * np.exp(2j * t)))
+    rig = CupRig(lying_cylinder(radius), sim=_sim_cup(overrides))
+    run, after = rig._run, []
+
+    def recording(*args, **kwargs):  # settle, move, approach, dwell, ...: keep the folds after each
+        out = run(*args, **kwargs)
+        after.append(-rig.data.qpos[rig.cup.lip_qpos].copy())
+        return out
+
+    rig._run = recording
+    result = rig.grasp([0.0, 0.0, 2.0 * radius])
+    second = abs(_second_harmonic(after[3]))
+    print(f"lying cylinder R {radius_mm} mm ({overrides}): folds' second harmonic {1e3 * second:.3f} mm, the thin "
+          f"lip's {1e3 * thin:.3f} mm ({second / thin:.3f}); sealed {result.sealed}, lifted {result.lifted}")
+
+
 def lip(overrides: str, key: str, seed: int) -> None:
     """Print the simulated lip's fold harmonics (module docstring)."""
-    fields = {} if overrides == "-" else dict(kv.split("=") for kv in overrides.split(","))
-    sim_cup = dataclasses.replace(SIM_CUP_DEFAULT, **{k: float(v) for k, v in fields.items()})
-    runner = _runner(key, seed, sim_cup)
+    runner = _runner(key, seed, _sim_cup(overrides))
     episode = runner.episode
     cup_state, cup = episode.cup, episode.cup.cup
     k = cup_state.sim.lip_point_stiffness(cup)
@@ -97,8 +146,7 @@ def lip(overrides: str, key: str, seed: int) -> None:
     if len(steps) > 5:
 
         def harmonics(fold):
-            first = np.linalg.lstsq(basis, fold, rcond=None)[0]
-            return first, 2.0 * np.mean((fold - basis @ first) * np.exp(2j * theta))
+            return np.linalg.lstsq(basis, fold, rcond=None)[0], _second_harmonic(fold)
 
         axis = 0.5 * np.angle(harmonics(steps[5][2])[1])  # the profile's most folded (axis-wise) bearing
         for name, step in (("lift start", steps[5]), ("lift peak", max(steps, key=lambda s: s[0]))):
@@ -206,6 +254,8 @@ if __name__ == "__main__":
         for arg in sys.argv[3:]:
             name, text = arg.rsplit(":", 1)
             lip(sys.argv[2], name, int(text))
+    elif len(sys.argv) in (3, 4) and sys.argv[1] == "conform":
+        conform(float(sys.argv[2]), sys.argv[3] if len(sys.argv) == 4 else "-")
     elif len(sys.argv) == 2 and sys.argv[1] == "peel":
         peel()
     elif len(sys.argv) >= 6 and sys.argv[1] == "ring":

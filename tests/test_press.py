@@ -134,6 +134,17 @@ def test_the_labellers_press_is_the_episodes_touch_down():
     assert PerturbationConfig().press_compression == 0.0  # the paper's model has no press
 
 
+def lying_tube_and_bore_line() -> tuple[trimesh.Trimesh, np.ndarray]:
+    """A lying paper-towel core (R_o = 22, R_i = 19 mm, along x, its axis through the origin) and
+    the unit direction (1, 3) from its axis to the bore's wall 30 deg past the bore's bottom."""
+    outer = trimesh.creation.cylinder(radius=0.022, height=0.22, sections=64)
+    inner = trimesh.creation.cylinder(radius=0.019, height=0.24, sections=64)
+    tube = outer.difference(inner)
+    tube.apply_transform(trimesh.transformations.rotation_matrix(math.pi / 2, [0, 1, 0]))
+    a = math.radians(30.0)
+    return tube, np.array([[0.0, -math.sin(a), -math.cos(a)]])
+
+
 def test_the_press_acts_where_the_lip_lands_not_at_a_target_behind_a_surface():
     # A target inside a lying tube's bore (R_o = 22, R_i = 19 mm), on the bore's wall 30 deg past
     # its bottom, approached along that wall's inward direction (through the tube's axis): the cup
@@ -142,12 +153,7 @@ def test_the_press_acts_where_the_lip_lands_not_at_a_target_behind_a_surface():
     # which the lip's friction need only tilt by half the grasp's angle, 15 deg < atan(0.5) = 26.6
     # deg, to pass through the tube's line of support: it stays put. Pressed at the target, the
     # chord to the support line lies ~90 deg off the force: it would roll away.
-    outer = trimesh.creation.cylinder(radius=0.022, height=0.22, sections=64)
-    inner = trimesh.creation.cylinder(radius=0.019, height=0.24, sections=64)
-    tube = outer.difference(inner)
-    tube.apply_transform(trimesh.transformations.rotation_matrix(math.pi / 2, [0, 1, 0]))
-    a = math.radians(30.0)
-    out = np.array([[0.0, -math.sin(a), -math.cos(a)]])
+    tube, out = lying_tube_and_bore_line()
     target, approach = 0.019 * out, out
     labeller = SuctionLabeller(tube, LabelConfig.for_episode(CUP_DEFAULT), mass=0.064)
     seal = labeller.seal(target, approach)
@@ -165,14 +171,8 @@ def test_the_perturbed_presses_act_where_each_lip_lands():
     # pair of samples shifts both lines alike and lands where the other does (the approach's own
     # rotation is left out: it turns each line about its own target, 41 mm apart along it, and so
     # would move the two lips apart). Their robust labels are therefore equal, sample by sample.
-    # Pressed at the bore's targets instead, every sample rolls the tube away (the nominal case
-    # above) and the bore grasp scored 0.
-    outer = trimesh.creation.cylinder(radius=0.022, height=0.22, sections=64)
-    inner = trimesh.creation.cylinder(radius=0.019, height=0.24, sections=64)
-    tube = outer.difference(inner)
-    tube.apply_transform(trimesh.transformations.rotation_matrix(math.pi / 2, [0, 1, 0]))
-    a = math.radians(30.0)
-    out = np.array([[0.0, -math.sin(a), -math.cos(a)]])
+    # Pressed at the bore's targets instead (the code before), 21 of the 50 samples differed.
+    tube, out = lying_tube_and_bore_line()
     config = LabelConfig.for_episode(CUP_DEFAULT)
     config = replace(config, perturbation=replace(config.perturbation, approach_rotation_std=0.0))
     labeller = SuctionLabeller(tube, config, mass=0.064)

@@ -119,7 +119,7 @@ class CupConfig:
     bellows_swing: bool = True
     """The bellows bends under the load's moment (bending_stiffness, up to approach_tolerance), so
     a lifted object swings towards hanging with its centre of mass below the lip and the seal
-    carries only what the bellows resists (contact/wrench.py, `lip_load`). False: a cup rigid
+    carries only what the bellows resists (contact/swing.py, `lip_load`). False: a cup rigid
     in bending, as the paper's quasi-static model (the `paper` preset)."""
 
     swing_overshoot: bool = True
@@ -127,7 +127,7 @@ class CupConfig:
     the transport starts), and a lightly damped swing then overshoots its equilibrium: the labeller
     judges the lip at the swing's first turning point, following the pick's motion where the
     object's inertia and support are known (contact/arrival.py), else for a load applied at once,
-    the bound (contact/wrench.py, `lip_load`). False: at the static equilibrium (the load applied
+    the bound (contact/swing.py, `lip_load`). False: at the static equilibrium (the load applied
     slowly)."""
 
     bellows_loss_factor: float = 0.1
@@ -147,7 +147,7 @@ class CupConfig:
     h_s = 3 mm (a fold and a half stacked) and r_m = 6.5 mm: 0.35 N m/rad, 11x the bellows' bending
     and 1.6x the lip's. No cup maker states the wall's geometry; t and h_s are assumed (like
     bellows_loss_factor). In series with the lip it sets how hard a swing is caught on the stop
-    (contact/wrench.py, `lip_load`; the simulated stop spring, sim/cup.py)."""
+    (contact/swing.py, `lip_load`; the simulated stop spring, sim/cup.py)."""
 
     def __post_init__(self) -> None:
         checks = {
@@ -216,7 +216,7 @@ class CupConfig:
         """Tilt stiffness of the lip ring (N m/rad): its springs (K / 2 pi per radian at radius r)
         resist a tilt phi of the object on the lip with int (K / 2 pi)(r phi sin t) r sin t dt
         = K r^2 phi / 2 (0.22 N m/rad by default, 7x the bellows'). In series with the bellows below
-        its stop, with the bellows and its squeezed stop beyond it (contact/wrench.py, `lip_load`)."""
+        its stop, with the bellows and its squeezed stop beyond it (contact/swing.py, `lip_load`)."""
         return 0.5 * self.lip_rate * self.radius**2
 
     @property

@@ -18,7 +18,7 @@ from suctionbench.contact.arrival import (
     response_factor,
     table_support,
 )
-from suctionbench.contact.wrench import _arrived_tilt, _Swing
+from suctionbench.contact.swing import Swing, _arrived_tilt
 
 G = STANDARD_GRAVITY
 
@@ -94,7 +94,7 @@ def test_lift_off_rate_and_turning_point_of_a_bar():
     frame = np.diag([1.0, -1.0, -1.0])[None]  # approach straight down (contact z = -world z)
     weight = np.array([[0.0, 0.0, -m * G]])
     arrival = _bar_arrival(m, length, weight)
-    swing = _Swing(weight, com, ring, frame, cup)
+    swing = Swing(weight, com, ring, frame, cup)
     phi_s = swing.static_tilt()
     lever = length / 2 + d
     risen = m * G / cup.axial_stiffness + lever * math.sin(phi_s[0])
@@ -116,7 +116,7 @@ def test_lift_off_rate_and_turning_point_of_a_bar():
     turned = _arrived_tilt(swing, phi_s, arrival, com, ring, frame, cup)
     assert turned[0] == pytest.approx(sol.y_events[0][0][0], rel=1e-6)
     # The step from rest at 0 would turn further: the bar arrives gentler than the bound.
-    step = float(_Swing(weight, com, ring, frame, cup).static_tilt()[0])
+    step = float(Swing(weight, com, ring, frame, cup).static_tilt()[0])
     assert phi_s[0] < turned[0] < 2.0 * step
 
 
@@ -138,7 +138,7 @@ def test_transport_swing_of_a_hanging_box():
     inertia_com = np.eye(3) * m * side * side / 6
     support = np.array([[x, y, -side / 2] for x in (-side / 2, side / 2) for y in (-side / 2, side / 2)])
     arrival = Arrival(weight, push, inertia_com, m, support, 0.15, 1.0, duration, cup.axial_stiffness, 0.0)
-    swing = _Swing(weight + push, com, ring, frame, cup)
+    swing = Swing(weight + push, com, ring, frame, cup)
     phi_s = swing.static_tilt()
     turned = float(_arrived_tilt(swing, phi_s, arrival, com, ring, frame, cup)[0])
 
@@ -181,7 +181,7 @@ def test_lip_wrench_at_the_bars_turning_point_is_newton_euler_with_its_inertia()
     # centre of mass's share alone. From the object's side (Newton, Euler about the lip centre):
     # lip force F = f' - m alpha (n x r), moment M = r x f' - m alpha r x (n x r) - alpha I_c n, with
     # f' the load in the tilted frame and alpha I_n = n.(r x f') - R(phi_p).
-    from suctionbench.contact.wrench import _arrived_tilt, lip_load
+    from suctionbench.contact.swing import _arrived_tilt, lip_load
 
     cup = dataclasses.replace(CUP_DEFAULT, bellows_loss_factor=0.0)
     m, length, d = 0.1, 0.2, 0.04
@@ -190,7 +190,7 @@ def test_lip_wrench_at_the_bars_turning_point_is_newton_euler_with_its_inertia()
     frame = np.diag([1.0, -1.0, -1.0])[None]
     weight = np.array([[0.0, 0.0, -m * G]])
     arrival = _bar_arrival(m, length, weight)
-    swing = _Swing(weight, com, ring, frame, cup)
+    swing = Swing(weight, com, ring, frame, cup)
     phi = _arrived_tilt(swing, swing.static_tilt(), arrival, com, ring, frame, cup)
     n, r = swing.n[0], swing.r[0]
     f = swing.turned(phi)[0]

@@ -417,7 +417,8 @@ def test_bellows_swing_is_the_pendulum_equilibrium():
     # squeezing the wall (k_st) in series with the lip, until h (f_x cos t + f_z sin t) =
     # k_c (t - theta_max k_st / (k_b + k_st)), k_c = 1 / (1 / k_l + 1 / (k_b + k_st)); a cup rigid
     # in bending (the paper's) leaves the load untouched.
-    from suctionbench.contact.wrench import external_wrench_at_contact, lip_load
+    from suctionbench.contact.swing import lip_load
+    from suctionbench.contact.wrench import external_wrench_at_contact
 
     static = dataclasses.replace(CUP, swing_overshoot=False)  # the load applied slowly: the equilibrium
     frame = np.eye(3)[None]
@@ -465,7 +466,7 @@ def test_swing_turning_point_is_the_pendulums():
     from scipy.integrate import solve_ivp
     from scipy.spatial.transform import Rotation
 
-    from suctionbench.contact.wrench import lip_load
+    from suctionbench.contact.swing import lip_load
 
     cup = dataclasses.replace(CUP, bellows_loss_factor=0.0)
     k, k_lip, theta_max = cup.bending_stiffness, 0.5 * cup.lip_rate * cup.radius**2, cup.approach_tolerance

@@ -19,7 +19,8 @@ from scipy.spatial.transform import Rotation
 from suctionbench.config import STANDARD_GRAVITY, LabelConfig, PerturbationConfig
 from suctionbench.contact import METRICS, SuctionLabeller
 from suctionbench.contact.robust import arrivals, sample_perturbations
-from suctionbench.contact.wrench import lip_load, resists
+from suctionbench.contact.swing import lip_load
+from suctionbench.contact.wrench import resists
 from suctionbench.errors import InputError
 from suctionbench.geometry.sampling import sample_surface_grasps
 from suctionbench.geometry.shapes import superellipsoid

@@ -11,8 +11,8 @@ from scipy.integrate import solve_ivp
 
 from suctionbench.config import CUP_DEFAULT, STANDARD_GRAVITY
 from suctionbench.contact.arrival import Arrival
+from suctionbench.contact.swing import Swing
 from suctionbench.contact.swing_path import swing_through
-from suctionbench.contact.wrench import _Swing
 
 G = STANDARD_GRAVITY
 SIDE = 0.06
@@ -29,14 +29,14 @@ def _cube(mass, com, a_peak, duration, cup, lift_height=0.15, hold=0.5):
     arrival = Arrival(weight, push, np.eye(3) * mass * SIDE * SIDE / 6, mass, SUPPORT, lift_height, 1.0,
                       duration, cup.axial_stiffness, cup.swing_damping_ratio, planned=True,
                       transport_peak=a_peak, hold_time=hold)
-    swing = _Swing(weight, com, RING, FRAME, cup)
+    swing = Swing(weight, com, RING, FRAME, cup)
     return swing, arrival, swing_through(swing, arrival, com, RING, FRAME, cup)[0]
 
 
 def test_a_slow_transport_holds_the_static_swing_at_its_peak_load():
     # Quasi-static: in a transport lasting 40 natural periods of the swing (T_n = 2 pi sqrt(I / k),
     # ~0.37 s for this cube) the tilt follows the load's equilibrium, and at the peak acceleration
-    # the lip carries the cup's return at the static tilt of m (g - a_peak) (`_Swing.static_tilt`
+    # the lip carries the cup's return at the static tilt of m (g - a_peak) (`Swing.static_tilt`
     # of that load), the most of the carry. Not quite without loss: a min-jerk acceleration starts
     # as a ramp, a'(0) = 10.4 a_peak / T, and a ramp c t sets a swing ringing about its equilibrium
     # with amplitude (dphi/da) c / omega (0.018 rad at T = 7 s, 8 % of the static tilt; an exact
@@ -46,7 +46,7 @@ def test_a_slow_transport_holds_the_static_swing_at_its_peak_load():
     cup = CUP_DEFAULT
     mass, a_peak = 0.2, 3.1
     com = np.zeros((1, 3))
-    loaded = _Swing(np.array([[-mass * a_peak, 0.0, -mass * G]]), com, RING, FRAME, cup)
+    loaded = Swing(np.array([[-mass * a_peak, 0.0, -mass * G]]), com, RING, FRAME, cup)
     inertia = mass * SIDE * SIDE / 6 + mass * (SIDE / 2) ** 2
     period = 2 * math.pi * math.sqrt(inertia / float(loaded.stiffness(np.zeros(1))[0]))
     _, _, (lift, carry) = _cube(mass, com, a_peak, 40 * period, cup)
@@ -85,7 +85,7 @@ def test_transport_swing_against_an_accurate_integration(duration):
 
 def test_an_off_centre_grasp_lifted_gently_hangs_at_its_static_tilt():
     # Held 2 cm beside its centre of mass, the cube hangs at the weight's static tilt phi_s
-    # (`_Swing.static_tilt`). Lifted 1 mm in 1 s it leaves the table turning at ~0.002 rad/s: no
+    # (`Swing.static_tilt`). Lifted 1 mm in 1 s it leaves the table turning at ~0.002 rad/s: no
     # swing to speak of; with no transport the lip carries the cup's return R(phi_s) throughout the
     # carry, here with the silicone's loss (it has nothing to damp).
     cup = CUP_DEFAULT
@@ -109,12 +109,12 @@ def test_each_row_swings_on_its_own():
     arrival = Arrival(weight, push, np.eye(3) * mass * SIDE * SIDE / 6, mass, SUPPORT, 0.15, 1.0,
                       np.array([0.8, 1.0, 1.3]), cup.axial_stiffness, cup.swing_damping_ratio, planned=True,
                       transport_peak=3.1, hold_time=0.5)
-    together = swing_through(_Swing(weight, com, ring, frames, cup), arrival, com, ring, frames, cup)
+    together = swing_through(Swing(weight, com, ring, frames, cup), arrival, com, ring, frames, cup)
     for row in range(3):
         one = slice(row, row + 1)
-        alone = swing_through(_Swing(weight[one], com[one], ring[one], frames[one], cup), arrival.take(one),
+        alone = swing_through(Swing(weight[one], com[one], ring[one], frames[one], cup), arrival.take(one),
                               com[one], ring[one], frames[one], cup)
-        lift_off = arrival.take(one).lift_off(_Swing(weight[one], com[one], ring[one], frames[one], cup).n,
+        lift_off = arrival.take(one).lift_off(Swing(weight[one], com[one], ring[one], frames[one], cup).n,
                                               np.zeros(1), ring[one], com[one], frames[one])[1]
         assert lift_off[0] > 0.0
         np.testing.assert_allclose(together[row], alone[0], rtol=0.02, atol=1e-6)

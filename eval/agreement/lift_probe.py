@@ -22,6 +22,7 @@ import sys
 import numpy as np
 
 from suctionbench.config import CUP_DEFAULT as CUP
+from suctionbench.contact import swing as swing_model
 from suctionbench.contact import swing_path, wrench
 from suctionbench.evaluation.agreement import NOT_EXECUTED
 from suctionbench.objects.registry import load_object
@@ -41,7 +42,7 @@ def _runner(key: str, seed: int) -> PickRunner:
 def swing(key: str, seed: int) -> None:
     """Print both models' lift for one trial (module docstring)."""
     spied: dict = {"wrench": None, "tilts": [], "on": False}
-    through, turned = wrench.swing_through, swing_path._axis_turned
+    through, turned = swing_model.swing_through, swing_path._axis_turned
 
     def spy_through(swing_, arrival, *args, **kwargs):
         nominal = len(args[2]) == 1  # the nominal label: one grasp, no perturbation samples
@@ -61,7 +62,7 @@ def swing(key: str, seed: int) -> None:
             spied["tilts"].append(math.degrees(float(np.hypot(*phi[0]))))
         return turned(phi)
 
-    wrench.swing_through, swing_path._axis_turned = spy_through, spy_turned
+    swing_model.swing_through, swing_path._axis_turned = spy_through, spy_turned
     try:
         runner = _runner(key, seed)
         episode, sim = runner.episode, []
@@ -75,7 +76,7 @@ def swing(key: str, seed: int) -> None:
         episode.recorder, episode.record_every = record, 1
         result = runner.run_after_reset()
     finally:
-        wrench.swing_through, swing_path._axis_turned = through, turned
+        swing_model.swing_through, swing_path._axis_turned = through, turned
     print(f"{key} seed {seed}: simulated {'success' if result['success'] else result['failure']}, "
           f"label rwr {result['label_rwr']}")
     if spied["wrench"] is not None:

@@ -1,7 +1,9 @@
 """The analytic suction labeller: Dex-Net 3.0's compliant suction contact model.
 
-seal.py (spring seal formation), wrench.py (suction-ring wrench resistance), robust.py
-(Monte-Carlo robust wrench resistance), metrics.py (metric registry), labeller.py (entry point).
+seal.py (spring seal formation), swing.py (the wrench the swinging bellows' lip carries; in time:
+swing_path.py, the load's arrival: arrival.py), wrench.py (suction-ring wrench resistance),
+press.py (the touch-down's press), robust.py (Monte-Carlo robust wrench resistance), metrics.py
+(metric registry), labeller.py (entry point).
 """
 
 from suctionbench.contact.labeller import SuctionLabeller

@@ -1,6 +1,6 @@
 """How a pick's loads reach the swinging cup: the lift-off and the transport's acceleration.
 
-The bellows lets a held object swing (`wrench._Swing`), and a swing overshoots its equilibrium by
+The bellows lets a held object swing (`swing.Swing`), and a swing overshoots its equilibrium by
 as much as the load's arrival lets it. Taking every load as applied at once from rest (the step:
 twice the static tilt for a linear spring) bounds every history, but the pick's motion is known
 (`PerturbationConfig`: lift height and time, transport time, the cup's rated acceleration), and
@@ -130,7 +130,7 @@ def table_support(hull: np.ndarray, gravity: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Arrival:
-    """What `wrench.lip_load` needs to follow the arrival of one load case, per row (one row per
+    """What `swing.lip_load` needs to follow the arrival of one load case, per row (one row per
     load): the lift (`transport_force` None) or a transport (`transport_force` the inertial part
     m a of each load, the rest being the weight `weight`)."""
 

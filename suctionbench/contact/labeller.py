@@ -14,7 +14,8 @@ from suctionbench.contact.metrics import METRICS, GraspLabels
 from suctionbench.contact.press import Footprint, stays_put
 from suctionbench.contact.robust import ObjectState, arrivals, inertial_forces, planned_forces, robust_wrench_resistance
 from suctionbench.contact.seal import PUSHED_AWAY, SealModel, SealResult
-from suctionbench.contact.wrench import lip_loads, resists
+from suctionbench.contact.swing import lip_loads
+from suctionbench.contact.wrench import resists
 from suctionbench.errors import InputError
 from suctionbench.geometry.frames import approach_frames
 from suctionbench.geometry.mesh import MeshInfo, validate_mesh

@@ -42,7 +42,8 @@ from suctionbench.config import CupConfig, PerturbationConfig
 from suctionbench.contact.arrival import Arrival
 from suctionbench.contact.press import Footprint, stays_put
 from suctionbench.contact.seal import SealModel
-from suctionbench.contact.wrench import lip_loads, resists, resists_qp
+from suctionbench.contact.swing import lip_loads
+from suctionbench.contact.wrench import resists, resists_qp
 from suctionbench.geometry.frames import so3_exp
 
 CHUNK_SAMPLES = 8192

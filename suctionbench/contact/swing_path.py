@@ -8,7 +8,7 @@ one-body swing is integrated in time, and the lip judged at its worst instant of
 
 The model (contact frame, which the straight lift and transport do not turn). The object is a
 rigid body hinged at the lip centre, tilted by the in-plane rotation vector phi (|phi| the tilt,
-phi / |phi| its axis); the cup returns R(|phi|) about that axis (`wrench._Swing.returned`: bellows
+phi / |phi| its axis); the cup returns R(|phi|) about that axis (`swing.Swing.returned`: bellows
 and lip in series, the stop beyond theta_max); the silicone loses 2 zeta sqrt(k I) per rad/s
 (zeta = cup.swing_damping_ratio, k and I the hanging swing's stiffness and moment of inertia); the
 load is m (g - a(t)) at the centre of mass, a(t) the tool's min-jerk acceleration:
@@ -87,7 +87,7 @@ def _axis_turned(phi: np.ndarray) -> np.ndarray:
 
 def _damping(swing, phi_s: np.ndarray, about_lip: np.ndarray, zeta: float) -> np.ndarray:
     """(N,) the silicone's loss c = 2 zeta sqrt(k I) (N m s/rad) of the hanging swing: k its
-    stiffness at the weight's static tilt (`_Swing.stiffness`), I the moment of inertia about its
+    stiffness at the weight's static tilt (`Swing.stiffness`), I the moment of inertia about its
     axis through the lip centre (a load with no tilting moment: the mean of the in-plane ones)."""
     axis = swing.n
     along = np.einsum("ni,nij,nj->n", axis, about_lip, axis)
@@ -114,7 +114,7 @@ def swing_through(swing, arrival, com: np.ndarray, ring_centre: np.ndarray, fram
                   cup: CupConfig) -> np.ndarray:
     """(N, 2, 6) the wrench the lip carries (contact frame, as `wrench.resists` takes it) at the
     worst instant of the lift and of the carry (module docstring), for the swing of the object's
-    weight alone `swing` (`wrench._Swing`: its static tilt and axis start the lift-off) and the
+    weight alone `swing` (`swing.Swing`: its static tilt and axis start the lift-off) and the
     planned motion `arrival` (`Arrival` with `planned` set: its transport force gives the
     direction, its transport_time, transport_peak and hold_time the timing)."""
     count = len(frames)

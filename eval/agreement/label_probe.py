@@ -13,6 +13,14 @@ Usage:
       second harmonic of the lip points' folds at the end of the vacuum's dwell, beside the thin
       lip's profile h(t) = R - sqrt(R^2 - r^2 sin^2 t) (SimCupConfig fields overridden as for lip;
       a tuple's items separated by ';', e.g. contact_solimp=0.99;0.999;0.0005).
+  python eval/agreement/label_probe.py lag OBJECT:SEED [OBJECT:SEED ...]
+      the labeller's planned swing for the trial's nominal grasp, step by step, with the cup's
+      vacuum lagging its leak (first order, the simulated cup's 30 ms): where the lip's moment
+      passes the ring limit r N / 2 its lifted side leaks (a flat face's spring ring, no seal-gap
+      allowance), the vacuum falls towards what the ejector holds against that leak, and the lip
+      peels if the moment reaches the rim, r N, or the vacuum the part-present switch. Prints the
+      peak moment over the ring limit, the lowest vacuum and the verdict, beside the profile's
+      largest lip height (the flat-face model holds only where it is ~0).
   python eval/agreement/label_probe.py peel
       the quasi-static peel criterion with the labeller's spring ring (48 places of rate K / 48, a
       lifted place leaking its gap x arc, the ejector's vacuum): the largest tilting moment a flat
@@ -158,6 +166,79 @@ def lip(overrides: str, key: str, seed: int) -> None:
                   f"vacuum {step[4]:.3f}")
 
 
+def _flat_lifted_leak(ratio: float, normal: float, cup) -> float:
+    """Leak area (m^2) of a flat face's spring ring (rate K round it) carrying the normal force
+    `normal` with a tilting moment `ratio` x r x normal, beyond the ring limit (ratio > 1/2): the
+    compression c0 + c1 cos(theta) lifts where it is negative; with rho = c1 / c0 and the contact's
+    half-angle a = acos(-1 / rho), ratio = (2 sin a + rho (a + sin a cos a)) / (2 (a + rho sin a)),
+    normal = (K c0 / pi)(a + rho sin a), and the lifted arc's area is 2 r c0 (rho sin a - (pi - a))."""
+    def shape(rho: float) -> tuple[float, float]:
+        a = math.acos(-1.0 / rho)
+        return (2 * math.sin(a) + rho * (a + math.sin(a) * math.cos(a))) / (2 * (a + rho * math.sin(a))), a
+
+    low, high = 1.0, 1e6
+    for _ in range(100):
+        mid = math.sqrt(low * high)
+        low, high = (mid, high) if shape(mid)[0] < ratio else (low, mid)
+    rho = 0.5 * (low + high)
+    a = shape(rho)[1]
+    c0 = math.pi * normal / (cup.lip_rate * (a + rho * math.sin(a)))
+    return 2.0 * cup.radius * c0 * (rho * math.sin(a) - (math.pi - a))
+
+
+def lag(key: str, seed: int) -> None:
+    """Print the planned swing with the vacuum lagging its leak (module docstring)."""
+    from suctionbench.contact import swing as swing_model
+    from suctionbench.vacuum import equilibrium_vacuum
+
+    cup, tau = CUP_DEFAULT, SIM_CUP_DEFAULT.vacuum_time_constant
+    history: list = []
+    through = swing_model.swing_through
+
+    def spy(swing_, arrival, *args, **kwargs):
+        if len(args[2]) == 1:  # the nominal grasp: one row
+            kwargs["trace"] = lambda t, w, active: history.append(
+                (t, float(np.hypot(w[0, 3], w[0, 4])), float(w[0, 2]), bool(active[0])))
+        return through(swing_, arrival, *args, **kwargs)
+
+    swing_model.swing_through = spy
+    try:
+        runner = _runner(key, seed)
+        mesh, com = runner.posed_object(runner.object_pose())
+        grasp = random_surface_grasp(mesh, seed)
+        labels = runner.label_grasp(grasp.point, grasp.approach, mesh, com)
+        from suctionbench.config import LabelConfig
+        from suctionbench.contact.labeller import SuctionLabeller
+
+        labeller = SuctionLabeller(mesh, LabelConfig.for_episode(cup), mass=runner.record.mass, com=com)
+        seal = labeller.seal(grasp.point[None], grasp.approach[None])
+    finally:
+        swing_model.swing_through = through
+    heights = 0.0 if seal.lip_heights is None else float(np.abs(seal.lip_heights).max())
+    p, lowest, peak, verdict, last = 1.0, 1.0, 0.0, "held", None
+    for t, moment, pull, active in history:
+        if not active:
+            continue
+        dt = 0.0 if last is None else t - last
+        last = t
+        normal = p * cup.vacuum_force - pull  # f_N = V + f_z, f_z = -w_z (the load's pull)
+        ratio = moment / (cup.radius * max(normal, 1e-12))
+        peak = max(peak, 2.0 * ratio)
+        if normal <= 0.0 or ratio >= 1.0:
+            verdict = f"peeled at {t:.3f} s (moment at the rim)"
+            break
+        leak = _flat_lifted_leak(ratio, normal, cup) if ratio > 0.5 else 0.0
+        target = float(equilibrium_vacuum(leak, cup)) / cup.vacuum_pressure
+        p += (target - p) * (1.0 - math.exp(-dt / tau))
+        lowest = min(lowest, p)
+        if p < cup.vacuum_switch_fraction:
+            verdict = f"peeled at {t:.3f} s (vacuum at the switch)"
+            break
+    print(f"{key} seed {seed}: label rwr {labels['label_rwr']}, nominal {labels['label_wr']}; largest lip height "
+          f"{1e3 * heights:.2f} mm; planned swing's peak moment {peak:.2f} of the ring limit, lowest vacuum "
+          f"{lowest:.3f}: {verdict}")
+
+
 PLACES = 48
 
 
@@ -256,6 +337,10 @@ if __name__ == "__main__":
             lip(sys.argv[2], name, int(text))
     elif len(sys.argv) in (3, 4) and sys.argv[1] == "conform":
         conform(float(sys.argv[2]), sys.argv[3] if len(sys.argv) == 4 else "-")
+    elif len(sys.argv) >= 3 and sys.argv[1] == "lag":
+        for arg in sys.argv[2:]:
+            name, text = arg.rsplit(":", 1)
+            lag(name, int(text))
     elif len(sys.argv) == 2 and sys.argv[1] == "peel":
         peel()
     elif len(sys.argv) >= 6 and sys.argv[1] == "ring":

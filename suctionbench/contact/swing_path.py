@@ -111,12 +111,14 @@ def _lip_wrench(phi: np.ndarray, omega: np.ndarray, alpha: np.ndarray, arm: np.n
 
 
 def swing_through(swing, arrival, com: np.ndarray, ring_centre: np.ndarray, frames: np.ndarray,
-                  cup: CupConfig) -> np.ndarray:
+                  cup: CupConfig, trace=None) -> np.ndarray:
     """(N, 2, 6) the wrench the lip carries (contact frame, as `wrench.resists` takes it) at the
     worst instant of the lift and of the carry (module docstring), for the swing of the object's
     weight alone `swing` (`swing.Swing`: its static tilt and axis start the lift-off) and the
     planned motion `arrival` (`Arrival` with `planned` set: its transport force gives the
-    direction, its transport_time, transport_peak and hold_time the timing)."""
+    direction, its transport_time, transport_peak and hold_time the timing). `trace`, if given, is
+    called at every step with (t, the lip's wrench (N, 6) as returned for the worst instants,
+    which rows swing (N,)): the whole history, for probes."""
     count = len(frames)
     if count == 0:
         return np.zeros((0, len(PHASES), 6))
@@ -172,6 +174,8 @@ def swing_through(swing, arrival, com: np.ndarray, ring_centre: np.ndarray, fram
         # (less what accelerates the centre of mass) is formed only where a row has a new worst.
         pull = np.einsum("ni,ni->n", load, along)
         ratio = np.hypot(lip[:, 0], lip[:, 1]) / (limit_scale * np.maximum(vacuum - pull, 1e-9))
+        if trace is not None:
+            trace(t, _lip_wrench(phi, omega, alpha, arm, arm0, load, lip, mass), active)
         worse = np.flatnonzero(active & (ratio > best[:, phase]))
         if len(worse):
             best[worse, phase] = ratio[worse]

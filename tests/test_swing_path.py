@@ -118,3 +118,25 @@ def test_each_row_swings_on_its_own():
                                               np.zeros(1), ring[one], com[one], frames[one])[1]
         assert lift_off[0] > 0.0
         np.testing.assert_allclose(together[row], alone[0], rtol=0.02, atol=1e-6)
+
+
+def test_the_trace_holds_the_returned_worst_instants():
+    # `trace` reports the lip's wrench at every step of the swing the function integrates, and the
+    # wrench it returns for each phase is formed at one of those steps from the same state: so
+    # the lift's (before the lift's 1 s) and the carry's (after it) are each found, to rounding,
+    # among the traced steps of their phase. An off-centre grasp, so both phases tip the lip.
+    cup = CUP_DEFAULT
+    mass, com = 0.2, np.array([[0.012, 0.004, 0.0]])
+    weight = np.array([[0.0, 0.0, -mass * G]])
+    push = np.array([[-mass * 3.1, 0.0, 0.0]])
+    arrival = Arrival(weight, push, np.eye(3) * mass * SIDE * SIDE / 6, mass, SUPPORT, 0.15, 1.0, 0.6,
+                      cup.axial_stiffness, cup.swing_damping_ratio, planned=True, transport_peak=3.1, hold_time=0.5)
+    steps = []
+    out = swing_through(Swing(weight, com, RING, FRAME, cup), arrival, com, RING, FRAME, cup,
+                        trace=lambda t, w, active: steps.append((t, w[0].copy(), bool(active[0]))))
+    lift = [w for t, w, active in steps if active and t < 1.0]
+    carry = [w for t, w, active in steps if active and t >= 1.0]
+    assert len(carry) > 500  # 0.6 s of transport and 0.5 s of hold at 2 ms
+    for traced, returned in ((lift, out[0, 0]), (carry, out[0, 1])):
+        assert math.hypot(returned[3], returned[4]) > 1e-3  # the lip is tipped: not a trivial match
+        assert min(np.abs(w - returned).max() for w in traced) < 1e-12

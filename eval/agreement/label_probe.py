@@ -39,21 +39,14 @@ import math
 import sys
 
 import numpy as np
+from lift_probe import _label_trial, _runner  # the agreement trial (this folder's scripts share it)
 
-from suctionbench.config import CUP_DEFAULT
+from suctionbench.config import CUP_DEFAULT, LabelConfig
 from suctionbench.contact import robust, wrench
-from suctionbench.objects.registry import load_object
-from suctionbench.policies.analytic import random_surface_grasp
+from suctionbench.contact import swing as swing_model
+from suctionbench.contact.labeller import SuctionLabeller
 from suctionbench.sim.cup import SIM_CUP_DEFAULT
-from suctionbench.sim.pick import PickRequest, PickRunner
-from suctionbench.vacuum import vacuum_force
-
-
-def _runner(key: str, seed: int, sim_cup=SIM_CUP_DEFAULT) -> PickRunner:
-    runner = PickRunner(PickRequest(key, policy="random-surface", record=load_object(key), sim_cup=sim_cup))
-    runner.request.seed = seed
-    runner.reset()
-    return runner
+from suctionbench.vacuum import equilibrium_vacuum, vacuum_force
 
 
 def samples(key: str, seed: int) -> None:
@@ -73,10 +66,7 @@ def samples(key: str, seed: int) -> None:
 
     robust.evaluate_samples, robust.stays_put = spy_evaluate, spy_stays
     try:
-        runner = _runner(key, seed)
-        mesh, com = runner.posed_object(runner.object_pose())
-        grasp = random_surface_grasp(mesh, seed)
-        labels = runner.label_grasp(grasp.point, grasp.approach, mesh, com)
+        labels = _label_trial(key, seed)[-1]
     finally:
         robust.evaluate_samples, robust.stays_put = evaluate, stays
     put = seen.get("stays")
@@ -97,13 +87,13 @@ def _sim_cup(overrides: str):
     return dataclasses.replace(SIM_CUP_DEFAULT, **{k: value(v) for k, v in fields.items()})
 
 
-def _second_harmonic(folds: np.ndarray) -> complex:
-    """The second harmonic (complex amplitude, m) of folds at evenly spaced places round the lip,
-    what is left once the mean and the first harmonic (the bellows' plane) are taken out."""
+def _harmonics(folds: np.ndarray) -> tuple[np.ndarray, complex]:
+    """Folds at evenly spaced places round the lip taken apart: (mean, cos, sin) coefficients (the
+    bellows' plane) and the second harmonic (complex amplitude, m) of what is left."""
     theta = wrench.lip_angles(len(folds))
     basis = np.column_stack([np.ones_like(theta), np.cos(theta), np.sin(theta)])
-    rest = folds - basis @ np.linalg.lstsq(basis, folds, rcond=None)[0]
-    return 2.0 * np.mean(rest * np.exp(2j * theta))
+    first = np.linalg.lstsq(basis, folds, rcond=None)[0]
+    return first, 2.0 * np.mean((folds - basis @ first) * np.exp(2j * theta))
 
 
 def conform(radius_mm: float, overrides: str) -> None:
@@ -126,7 +116,7 @@ def conform(radius_mm: float, overrides: str) -> None:
 
     rig._run = recording
     result = rig.grasp([0.0, 0.0, 2.0 * radius])
-    second = abs(_second_harmonic(after[3]))
+    second = abs(_harmonics(after[3])[1])
     print(f"lying cylinder R {radius_mm} mm ({overrides}): folds' second harmonic {1e3 * second:.3f} mm, the thin "
           f"lip's {1e3 * thin:.3f} mm ({second / thin:.3f}); sealed {result.sealed}, lifted {result.lifted}")
 
@@ -138,7 +128,6 @@ def lip(overrides: str, key: str, seed: int) -> None:
     cup_state, cup = episode.cup, episode.cup.cup
     k = cup_state.sim.lip_point_stiffness(cup)
     theta = wrench.lip_angles(len(cup_state.lip_qpos))
-    basis = np.column_stack([np.ones_like(theta), np.cos(theta), np.sin(theta)])
     steps: list = []
 
     def record(data, controller) -> None:
@@ -152,13 +141,9 @@ def lip(overrides: str, key: str, seed: int) -> None:
     result = runner.run_after_reset()
     print(f"{key} seed {seed} ({overrides}): simulated {'success' if result['success'] else result['failure']}")
     if len(steps) > 5:
-
-        def harmonics(fold):
-            return np.linalg.lstsq(basis, fold, rcond=None)[0], _second_harmonic(fold)
-
-        axis = 0.5 * np.angle(harmonics(steps[5][2])[1])  # the profile's most folded (axis-wise) bearing
+        axis = 0.5 * np.angle(_harmonics(steps[5][2])[1])  # the profile's most folded (axis-wise) bearing
         for name, step in (("lift start", steps[5]), ("lift peak", max(steps, key=lambda s: s[0]))):
-            first, harmonic = harmonics(step[2])
+            first, harmonic = _harmonics(step[2])
             bearing = math.degrees(math.atan2(-first[1], first[2]) - axis) % 360.0  # tau = pi r (p_y, -p_x)
             print(f"  {name}: moment {1e3 * step[1]:.1f} mN m ({step[0]:.2f} of the flat ring limit) at "
                   f"{bearing:.0f} deg from the axis-wise side, folds' second harmonic {1e3 * abs(harmonic):.2f} mm, "
@@ -188,9 +173,6 @@ def _flat_lifted_leak(ratio: float, normal: float, cup) -> float:
 
 def lag(key: str, seed: int) -> None:
     """Print the planned swing with the vacuum lagging its leak (module docstring)."""
-    from suctionbench.contact import swing as swing_model
-    from suctionbench.vacuum import equilibrium_vacuum
-
     cup, tau = CUP_DEFAULT, SIM_CUP_DEFAULT.vacuum_time_constant
     history: list = []
     through = swing_model.swing_through
@@ -203,17 +185,11 @@ def lag(key: str, seed: int) -> None:
 
     swing_model.swing_through = spy
     try:
-        runner = _runner(key, seed)
-        mesh, com = runner.posed_object(runner.object_pose())
-        grasp = random_surface_grasp(mesh, seed)
-        labels = runner.label_grasp(grasp.point, grasp.approach, mesh, com)
-        from suctionbench.config import LabelConfig
-        from suctionbench.contact.labeller import SuctionLabeller
-
-        labeller = SuctionLabeller(mesh, LabelConfig.for_episode(cup), mass=runner.record.mass, com=com)
-        seal = labeller.seal(grasp.point[None], grasp.approach[None])
+        runner, mesh, com, grasp, labels = _label_trial(key, seed)
     finally:
         swing_model.swing_through = through
+    labeller = SuctionLabeller(mesh, LabelConfig.for_episode(cup), mass=runner.record.mass, com=com)
+    seal = labeller.seal(grasp.point[None], grasp.approach[None])  # the lip's profile: label_grasp keeps none
     heights = 0.0 if seal.lip_heights is None else float(np.abs(seal.lip_heights).max())
     p, lowest, peak, verdict, last = 1.0, 1.0, 0.0, "held", None
     for t, moment, pull, active in history:
@@ -269,12 +245,21 @@ def _lip_gaps(normal: float, torque: np.ndarray, heights: np.ndarray, cup, place
     return basis @ u - heights
 
 
+def _largest(holds, high: float) -> float:
+    """The largest value in [0, high] for which `holds(value)`, by 40 bisections (holds(0) true)."""
+    low = 0.0
+    for _ in range(40):
+        mid = 0.5 * (low + high)
+        low, high = (mid, high) if holds(mid) else (low, mid)
+    return low
+
+
 def _holds(pull: float, torque: np.ndarray, heights: np.ndarray, cup, leaking: bool) -> bool:
     """Whether the lip holds: without `leaking`, no place lifts (p >= 0); with it, the largest
     equilibrium of lip and vacuum (monotone iteration down from the full vacuum) keeps the vacuum
     above the part-present switch."""
     v = cup.vacuum_force
-    arc = 2.0 * math.pi * cup.radius / PLACES
+    arc = 2.0 * math.pi * cup.radius / len(heights)
     for _ in range(300):
         normal = v - pull
         if np.hypot(*torque) >= cup.radius * normal * 0.999:
@@ -299,13 +284,8 @@ def peel() -> None:
         heights = -(cup.radius**2 / (4.0 * radius)) * np.cos(2.0 * theta)
         for bearing in (0.0, 90.0):
             direction = np.array([math.cos(math.radians(bearing)), math.sin(math.radians(bearing))])
-            found = []
-            for leaking in (False, True):
-                low, high = 0.0, cup.radius * (cup.vacuum_force - pull)
-                for _ in range(40):
-                    mid = 0.5 * (low + high)
-                    low, high = (mid, high) if _holds(pull, mid * direction, heights, cup, leaking) else (low, mid)
-                found.append(low)
+            found = [_largest(lambda m, d=direction, z=heights, leak=leaking: _holds(pull, m * d, z, cup, leak),
+                              cup.radius * (cup.vacuum_force - pull)) for leaking in (False, True)]
             print(f"  cylinder R {radius * 1e3:.0f} mm, torque at {bearing:.0f} deg: {found[0] * 1e3:.2f} mN m "
                   f"without the lifted lip's leak, {found[1] * 1e3:.2f} with it ({found[1] / found[0]:.4f}x)")
 
@@ -317,13 +297,10 @@ def ring(normal: float, places: int, bearing: float, amplitudes: list[float]) ->
     direction = np.array([math.cos(math.radians(bearing)), math.sin(math.radians(bearing))])
     for amplitude in amplitudes:
         heights = -1e-3 * amplitude * np.cos(2.0 * theta)
-        low, high = 0.0, cup.radius * normal
-        for _ in range(40):
-            mid = 0.5 * (low + high)
-            lifted = _lip_gaps(normal, mid * direction, heights, cup, places).min() < -1e-12
-            low, high = (low, mid) if lifted else (mid, high)
+        held = _largest(lambda m, z=heights: _lip_gaps(normal, m * direction, z, cup, places).min() >= -1e-12,
+                        cup.radius * normal)
         print(f"{places} places, normal force {normal} N, torque at {bearing} deg, profile {amplitude} mm: "
-              f"{low * 1e3:.2f} mN m")
+              f"{held * 1e3:.2f} mN m")
 
 
 if __name__ == "__main__":

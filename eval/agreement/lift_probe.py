@@ -27,16 +27,27 @@ from suctionbench.contact import swing_path, wrench
 from suctionbench.evaluation.agreement import NOT_EXECUTED
 from suctionbench.objects.registry import load_object
 from suctionbench.policies.analytic import random_surface_grasp
+from suctionbench.sim.cup import SIM_CUP_DEFAULT, SimCupConfig
 from suctionbench.sim.pick import PickRequest, PickRunner
 
 AGREEMENT = "eval/agreement/agreement.json"
 
 
-def _runner(key: str, seed: int) -> PickRunner:
-    runner = PickRunner(PickRequest(key, policy="random-surface", record=load_object(key)))
+def _runner(key: str, seed: int, sim_cup: SimCupConfig = SIM_CUP_DEFAULT) -> PickRunner:
+    """The agreement trial's runner (a random surface grasp, its seed), reset: the object placed."""
+    runner = PickRunner(PickRequest(key, policy="random-surface", record=load_object(key), sim_cup=sim_cup))
     runner.request.seed = seed
     runner.reset()
     return runner
+
+
+def _label_trial(key: str, seed: int):
+    """The agreement trial's grasp labelled as the episode labels it (no simulation): its runner,
+    the posed mesh and centre of mass, the grasp and its labels."""
+    runner = _runner(key, seed)
+    mesh, com = runner.posed_object(runner.object_pose())
+    grasp = random_surface_grasp(mesh, seed)
+    return runner, mesh, com, grasp, runner.label_grasp(grasp.point, grasp.approach, mesh, com)
 
 
 def swing(key: str, seed: int) -> None:
@@ -107,10 +118,7 @@ def relabel(out: str, no_sqrt3: bool) -> None:
         if not (t["valid"] and t["failure"] not in NOT_EXECUTED and t["label_seal"]
                 and (t["success"] or t["label_rwr"] >= 0.1)):
             continue
-        runner = _runner(t["object"], int(t["seed"]))
-        mesh, com = runner.posed_object(runner.object_pose())
-        grasp = random_surface_grasp(mesh, int(t["seed"]))
-        labels = runner.label_grasp(grasp.point, grasp.approach, mesh, com)
+        labels = _label_trial(t["object"], int(t["seed"]))[-1]
         rows.append({"object": t["object"], "seed": t["seed"], "success": t["success"],
                      "rwr": t["label_rwr"], "relabelled": labels["label_rwr"]})
     moved = [r for r in rows if abs(r["rwr"] - r["relabelled"]) > 1e-9]

@@ -73,7 +73,6 @@ class SuctionController:
         self._switch = self.cup.vacuum_switch_fraction
         n, k = len(self.lip_geoms), self.sim.leak_samples
         self._phi = 2.0 * math.pi * np.arange(k) / k
-        self._theta = 2.0 * math.pi * np.arange(n) / n if n else np.zeros(0)
         self._ring = np.stack([self.cup.radius * np.cos(self._phi), self.cup.radius * np.sin(self._phi)], axis=1)
         self._arc = 2.0 * math.pi * self.cup.radius / k
         self._group = np.zeros(6, dtype=np.uint8)

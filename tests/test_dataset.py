@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import filecmp
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -109,6 +110,23 @@ def test_resume_after_a_kill_equals_an_uninterrupted_run(reference, tmp_path, mo
     assert summary["bytes"] == sum(f.stat().st_size for f in out.rglob("*")
                                    if f.is_file() and "units" not in f.parts and f.name != "config.json")
     assert summary["bytes_per_datapoint"] > 32 * 32 * 4  # at least the float32 grasp thumbnail
+
+
+def test_shards_assembled_on_several_threads_are_the_same_bytes(reference, tmp_path):
+    # Each shard reads the units it spans (64-datapoint shards over 50-datapoint units: most span
+    # two, and units split across shard boundaries) and is written on its own; the result must be
+    # the one-thread assembly's files, byte for byte.
+    from suctionbench.dataset.storage import DatasetWriter
+
+    out = tmp_path / "threads"
+    shutil.copytree(reference, out)
+    shutil.rmtree(out / "tensors")
+    units = gen.plan_units(len(KEYS), CONFIG.datapoints, CONFIG)
+    writer = DatasetWriter(out, datapoints_per_shard=CONFIG.datapoints_per_shard)
+    stats = gen._assemble_shards(out, units, writer, CONFIG.datapoints_per_shard, CONFIG.label_threshold, threads=3)
+    assert stats["datapoints"] == CONFIG.datapoints and stats["shards"] == 3
+    np.testing.assert_array_equal(np.sort(stats["image_ids"]), np.sort(DatasetReader(reference).field("image_labels")))
+    assert same_tensors(reference, out)
 
 
 def test_corrupt_unit_is_reported_and_regenerated(reference, tmp_path):

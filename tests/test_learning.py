@@ -248,6 +248,20 @@ def test_streaming_covers_the_split_once_in_shuffled_order(dataset):
     np.testing.assert_array_equal(in_order, images)
 
 
+def test_reading_threads_do_not_change_the_batches(dataset):
+    # Threads only read a pool's shards at once; the pool is assembled in the shards' order, so the
+    # shuffled batches are the same datapoints in the same order for any thread count.
+    def streamed(threads: int) -> np.ndarray:
+        data = SplitData(dataset, "image_wise", "train", image_channels=2, load_threads=threads)
+        return np.concatenate([b.images for b in data.batches(50, np.random.default_rng(5), shuffle_shards=3)])
+
+    one = streamed(1)
+    np.testing.assert_array_equal(streamed(3), one)
+    np.testing.assert_array_equal(streamed(8), one)
+    with pytest.raises(InputError, match="load_threads"):
+        TrainConfig(load_threads=0)
+
+
 def test_normalisation_statistics(dataset):
     images, poses, _ = train_arrays(dataset)
     stats = SplitData(dataset, "image_wise", "train").compute_stats()
@@ -773,3 +787,51 @@ def test_an_averaged_run_resumes_to_the_uninterrupted_weights(dataset, tmp_path)
         assert torch.equal(a, b), name
     with pytest.raises(InputError, match="average"):
         TrainConfig(average=1.0)
+
+
+# ----------------------------------------------------------------------------------------------
+# CUDA (bfloat16 autocast): run where torch sees a GPU (`pytest -m gpu`), skipped elsewhere
+
+
+@pytest.mark.gpu
+def test_cuda_bfloat16_training_learns_and_its_model_predicts_on_the_cpu(dataset, tmp_path):
+    # The synthetic set separates by shape (disc vs ridge), which the CPU run learns to 99 %
+    # (test_compact_overfits_the_synthetic_set); bfloat16 keeps 8 bits of mantissa, enough for
+    # SGD's forward and backward passes with float32 master weights, so the CUDA run must learn it
+    # too. The saved weights are float32 and load on the CPU: there, in float32, the model's q
+    # differs from the trainer's bfloat16 validation scores only by bfloat16 rounding (relative
+    # 2^-8 per operand, a few hundredths of a logit through the network), far below 0.05 in q.
+    from suctionbench.learning.train import evaluate
+
+    metrics = train(dataset, tmp_path, TrainConfig(epochs=20, device="cuda", load_threads=2, **FAST))
+    card = json.loads((tmp_path / CARD_NAME).read_text())
+    assert card["training"]["device"].startswith("cuda") and card["training"]["mixed_precision"] == "bfloat16"
+    assert metrics["val_ap"] > 0.9
+    model = load_model(tmp_path)
+    assert next(model.network.parameters()).device.type == "cpu"
+    images, poses, metric = train_arrays(dataset)
+    assert np.mean((model.predict(images, poses) > 0.5) == (metric > 0.2)) >= 0.99
+    val = SplitData(dataset, "image_wise", "val")
+    cuda_scores = evaluate(model.network.to("cuda"), val, model.stats, 0.2, torch.device("cuda"))["scores"]
+    model = load_model(tmp_path)
+    cpu_scores = evaluate(model.network, val, model.stats, 0.2, torch.device("cpu"))["scores"]
+    assert np.abs(cuda_scores - cpu_scores).max() < 0.05
+
+
+@pytest.mark.gpu
+def test_a_cpu_run_resumes_on_cuda_with_augmentation_on_the_gpu(dataset, tmp_path):
+    # `device` may differ between a checkpoint and the run resuming it (RESUME_IGNORES): the resume
+    # state saved on the CPU loads onto the GPU (weights, momentum, both RNG states) and training
+    # continues there, with the context-pose net and gqcnn's noise and flips drawn from the CPU
+    # generator and applied to CUDA tensors.
+    config = {"arch": "context-pose", "seed": 4, "target": "soft", "average": 0.99}
+    train(dataset, tmp_path, TrainConfig(epochs=1, **config))
+    more = train(dataset, tmp_path, TrainConfig(epochs=3, device="cuda", **config))
+    assert more["resumed_from_epoch"] == 1 and more["epochs_trained_now"] == 2
+    history = json.loads((tmp_path / CARD_NAME).read_text())["history"]
+    assert len(history) == 3 and all(math.isfinite(h["val_loss"]) for h in history)
+    model = load_model(tmp_path)
+    data = SplitData(dataset, "image_wise", "train", image_channels=2, object_context=True)
+    batch = data.load_shard(data.shards[0])
+    q = model.predict(batch.images, batch.poses)
+    assert np.all(np.isfinite(q)) and np.all((q >= 0) & (q <= 1))

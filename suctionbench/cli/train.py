@@ -63,6 +63,8 @@ def train_cmd(
     average: Annotated[float | None, typer.Option(help="Score and save an exponential moving average of the weights "
                                                        "with this decay per step (e.g. 0.9995); default: the last "
                                                        "iterate.")] = None,
+    load_threads: Annotated[int, typer.Option(help="Threads reading the dataset's shards (more keep a GPU fed; "
+                                                   "the data order and the weights do not change).")] = 1,
     overwrite: Annotated[bool, typer.Option(help="Discard a run already in --out instead of resuming it.")] = False,
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
@@ -81,7 +83,7 @@ def train_cmd(
         config = TrainConfig(arch=arch, epochs=epochs, device=device, split=split, batch_size=batch_size,
                              max_train_datapoints=max_datapoints, max_val_datapoints=max_val_datapoints,
                              augment=AUGMENT_GQCNN if augment else AUGMENT_OFF, target=target, seed=seed,
-                             init=init, average=average)
+                             init=init, average=average, load_threads=load_threads)
         # Every option spelled out, defaults included: the card's command reproduces the run even if defaults change.
         command = shlex.join([
             "suctionbench", "train", "--dataset", str(dataset), "--out", str(out), "--arch", arch, "--epochs",
@@ -91,6 +93,7 @@ def train_cmd(
             "--augment" if augment else "--no-augment", "--target", target, "--seed", str(seed),
             *(["--init", init] if init else []),
             *(["--average", str(average)] if average is not None else []),
+            "--load-threads", str(load_threads),
         ])
         with _train_progress(not as_json) as update:
             metrics = train(dataset, out, config, progress=update, command=command, overwrite=overwrite)

@@ -18,8 +18,10 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
 import time
 from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -449,7 +451,8 @@ def generate_dataset(
 
     writer = DatasetWriter(out, datapoints_per_shard=config.datapoints_per_shard)
     assemble = time.perf_counter()
-    stats = _assemble_shards(out, units, writer, config.datapoints_per_shard, config.label_threshold)
+    threads = workers if workers > 0 else (os.cpu_count() or 1)
+    stats = _assemble_shards(out, units, writer, config.datapoints_per_shard, config.label_threshold, threads)
     write_splits(out, stats.pop("image_ids"), stats.pop("object_ids"), val_fraction=0.2, seed=config.seed)
     this_run["assembly_seconds"] = round(time.perf_counter() - assemble, 1)
     card.update(stats, status="complete", regenerated_corrupt_units=corrupt, rewritten_shard_problems=shard_problems,
@@ -484,38 +487,45 @@ def _generation_summary(runs: list[dict[str, Any]], units: int, out: Path, datap
             "bytes_per_datapoint": round(size / max(datapoints, 1), 1)}
 
 
-def _assemble_shards(out: Path, units: list[Unit], writer: Any, per_shard: int, threshold: float) -> dict[str, Any]:
-    """Stream the units, in order, into fixed-size shards (at most one shard in memory)."""
-    buffer: dict[str, list[np.ndarray]] = {name: [] for name in UNIT_FIELDS}
-    buffered, shard, total, positives = 0, 0, 0, 0
-    image_ids, object_ids = [], []
+def _assemble_shards(out: Path, units: list[Unit], writer: Any, per_shard: int, threshold: float,
+                     threads: int = 1) -> dict[str, Any]:
+    """Cut the units, in order, into fixed-size shards, `threads` shards at a time.
 
-    def flush(final: bool) -> None:
-        nonlocal buffered, shard
-        merged = {name: np.concatenate(parts) for name, parts in buffer.items()}
-        while buffered >= per_shard or (final and buffered):
-            n = min(per_shard, buffered)
-            writer.write_shard(shard, {name: arr[:n] for name, arr in merged.items()})
-            merged = {name: arr[n:] for name, arr in merged.items()}
-            buffered -= n
-            shard += 1
-        for name in buffer:
-            buffer[name] = [merged[name]]
-
+    A first pass reads each unit's three small label arrays (an ``.npz`` decompresses only the
+    members asked for) to place every unit in the datapoint order; then each shard reads the one
+    to three units it spans and is written on its own (`DatasetWriter` writes shards independently;
+    compression and hashing release the GIL, so threads run in parallel). The shards are the same
+    bytes for any thread count; memory holds at most `threads` shards' units.
+    """
+    counts, positives, image_ids, object_ids = [], 0, [], []
     for unit in units:
-        arrays = load_unit(out, unit.index)
-        for name in UNIT_FIELDS:
-            buffer[name].append(arrays[name])
-        n = len(arrays["image_labels"])
-        buffered, total = buffered + n, total + n
-        positives += int((arrays["robust_suction_wrench_resistance"] > threshold).sum())
-        image_ids.append(arrays["image_labels"])
-        object_ids.append(arrays["object_labels"])
-        if buffered >= per_shard:
-            flush(final=False)
-    flush(final=True)
+        with np.load(unit_path(out, unit.index)) as data:
+            image_ids.append(data["image_labels"])
+            object_ids.append(data["object_labels"])
+            positives += int((data["robust_suction_wrench_resistance"] > threshold).sum())
+        counts.append(len(image_ids[-1]))
+    starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    total = int(starts[-1])
+    shards = -(-total // per_shard)
+
+    def write(shard: int) -> None:
+        lo, hi = shard * per_shard, min((shard + 1) * per_shard, total)
+        first = int(np.searchsorted(starts, lo, side="right")) - 1  # the unit holding datapoint lo
+        last = int(np.searchsorted(starts, hi, side="left"))  # one past the unit holding datapoint hi - 1
+        parts = [load_unit(out, units[u].index) for u in range(first, last)]
+        offset = lo - int(starts[first])
+        writer.write_shard(shard, {name: np.concatenate([p[name] for p in parts])[offset:offset + hi - lo]
+                                   for name in UNIT_FIELDS})
+
+    if threads <= 1:
+        for shard in range(shards):
+            write(shard)
+    else:
+        with ThreadPoolExecutor(max_workers=threads) as pool:
+            for _ in pool.map(write, range(shards)):  # re-raises the first failure
+                pass
     return {
-        "datapoints": total, "shards": shard, "positive_rate": round(positives / total, 4) if total else 0.0,
+        "datapoints": total, "shards": shards, "positive_rate": round(positives / total, 4) if total else 0.0,
         "image_ids": np.concatenate(image_ids) if image_ids else np.zeros(0, np.int32),
         "object_ids": np.concatenate(object_ids) if object_ids else np.zeros(0, np.int32),
     }

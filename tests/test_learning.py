@@ -197,6 +197,13 @@ def test_context_net_reads_the_context_channel_with_its_own_stream():
     assert torch.equal(model(changed, poses), model(images, poses))
 
 
+def test_the_wide_object_context_net_is_context_wide_reading_six_more_pose_inputs():
+    # context-pose-wide: context-wide's layers (281,058 parameters) whose first pose layer (32
+    # units) also reads the 6 object-context inputs: 6 x 32 = 192 weights more.
+    assert count_parameters(build_model("context-pose-wide")) == 281_058 + 6 * 32 == 281_250
+    assert count_parameters(build_model("context-wide")) == 281_058
+
+
 def test_initialisation_is_seeded_truncated_he():
     a = build_model("dn3", torch.Generator().manual_seed(3))
     b = build_model("dn3", torch.Generator().manual_seed(3))

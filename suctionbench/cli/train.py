@@ -47,7 +47,8 @@ def train_cmd(
     out: Annotated[Path, typer.Option(help="Output directory: model.safetensors, model.json, checkpoints.")],
     arch: Annotated[str, typer.Option(help="Network: dn3 (Dex-Net 3.0 GQ-CNN), compact (CPU friendly), "
                                            "context / context-wide (also read the context thumbnail), or "
-                                           "context-pose (context, plus the object context in metres).")] = "dn3",
+                                           "context-pose (context, plus the object context in metres; "
+                                           "context-pose-wide: twice its widths).")] = "dn3",
     epochs: Annotated[int, typer.Option(help="Training epochs (gqcnn: 25).")] = 25,
     device: Annotated[str, typer.Option(help="cpu, or cuda (bfloat16 mixed precision).")] = "cpu",
     split: Annotated[str, typer.Option(help="Split: image_wise or object_wise.")] = "image_wise",

@@ -199,6 +199,8 @@ _SPECS: dict[str, dict] = {
     "context-wide": _compact_layout(32, context=True),
     # context, and the object context in metres in the pose stream (module doc, "context-pose")
     "context-pose": _compact_layout(16, context=True, object_context=True),
+    # context-pose with twice the filters and fc widths: the capacity step with the object context
+    "context-pose-wide": _compact_layout(32, context=True, object_context=True),
 }
 
 ARCHITECTURES = tuple(_SPECS)

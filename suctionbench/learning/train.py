@@ -122,7 +122,8 @@ class TrainConfig:
     arch: str = "dn3"
     """Network: dn3 (Dex-Net 3.0 GQ-CNN, 5.6 M parameters), compact (36 k, CPU friendly), the
     two-channel context (71 k) and context-wide (281 k), which also read the context thumbnail, or
-    context-pose (context with the object context in metres in its pose stream)."""
+    context-pose (context with the object context in metres in its pose stream) and its twice as wide
+    context-pose-wide."""
 
     epochs: int = 25
     """Passes over the training split. gqcnn: 25."""

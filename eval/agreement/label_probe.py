@@ -30,6 +30,14 @@ Usage:
       a spring ring of PLACES places carries under the normal force NORMAL_N without lifting
       anywhere, on a lying cylinder's profile -a cos(2 theta) of second harmonic a = AMPLITUDE_MM:
       the labeller's lip (48 places, the seal model's profile) beside the simulated one (16 points).
+  python eval/agreement/label_probe.py friction
+      the friction a ring of lip pressure carries, exactly (tractions of at most mu p per unit
+      angle at 720 places round the ring, the largest multiple of each load direction solved as a
+      cone program), for an evenly pressed lip and for one tilted to the ring limit (p = p0 (1 +
+      cos theta), lifted at theta = pi), beside what the paper's sqrt(3) box, the even share's
+      double cone |f_t| + |tau_z| / r <= mu 2 pi min p and the hull of the ring's two pure
+      strategies (all the lip sliding one way, or all twisting; `_hull_carries`) allow. Units:
+      f / (mu f_N), tau_z / (r mu f_N).
 """
 
 from __future__ import annotations
@@ -303,6 +311,88 @@ def ring(normal: float, places: int, bearing: float, amplitudes: list[float]) ->
               f"{held * 1e3:.2f} mN m")
 
 
+def _ring_carries(pressure: np.ndarray, load: np.ndarray) -> float:
+    """Largest s such that the ring (radius 1, pressure per unit angle `pressure` at equally spaced
+    places, friction coefficient 1) carries s * load = (f_x, f_y, tau_z): tractions t_k with
+    |t_k| <= p_k dtheta, sum t_k = s (f_x, f_y), sum e_k . t_k = s tau_z (e_k the ring's tangent)."""
+    import clarabel
+    import scipy.sparse as sp
+
+    places = len(pressure)
+    theta = 2.0 * np.pi * np.arange(places) / places
+    tangent = np.stack([-np.sin(theta), np.cos(theta)], axis=1)
+    n = 1 + 2 * places  # s, then (t_x, t_y) per place
+    equal = np.zeros((3, n))
+    equal[:, 0] = -load
+    equal[0, 1::2], equal[1, 2::2] = 1.0, 1.0
+    equal[2, 1::2], equal[2, 2::2] = tangent[:, 0], tangent[:, 1]
+    cones = np.zeros((3 * places, n))
+    bound = np.zeros(3 * places)
+    for k in range(places):
+        bound[3 * k] = pressure[k] * 2.0 * np.pi / places
+        cones[3 * k + 1, 1 + 2 * k], cones[3 * k + 2, 2 + 2 * k] = -1.0, -1.0
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    cost = np.zeros(n)
+    cost[0] = -1.0
+    solver = clarabel.DefaultSolver(sp.csc_matrix((n, n)), cost, sp.csc_matrix(np.vstack([equal, cones])),
+                                    np.concatenate([np.zeros(3), bound]),
+                                    [clarabel.ZeroConeT(3)] + [clarabel.SecondOrderConeT(3)] * places, settings)
+    return float(solver.solve().x[0])
+
+
+def _hull_carries(pressure: np.ndarray, load: np.ndarray) -> float:
+    """Largest s such that s * load lies in the hull of the ring's two pure strategies (module
+    docstring, friction): all the pressure sliding one way u, (F u, c . u), or twisting one way,
+    +-(c, F), with F = sum p dtheta = f_N and c = sum p_k e_k dtheta (only p's first harmonic, the
+    tilt, enters). Mixtures split the pressure: s load = (F y + l c, c . y + l F), |y| <= a,
+    a + |l| <= 1."""
+    import clarabel
+    import scipy.sparse as sp
+
+    places = len(pressure)
+    theta = 2.0 * np.pi * np.arange(places) / places
+    tangent = np.stack([-np.sin(theta), np.cos(theta)], axis=1)
+    total = float(pressure.sum() * 2.0 * np.pi / places)
+    c = (pressure[:, None] * tangent).sum(axis=0) * 2.0 * np.pi / places
+    # x = (s, y_x, y_y, a, l_plus, l_minus)
+    equal = np.array([[-load[0], total, 0.0, 0.0, c[0], -c[0]],
+                      [-load[1], 0.0, total, 0.0, c[1], -c[1]],
+                      [-load[2], c[0], c[1], 0.0, total, -total]])
+    nonneg = np.array([[0, 0, 0, 1, 1, 1], [0, 0, 0, -1, 0, 0], [0, 0, 0, 0, -1, 0], [0, 0, 0, 0, 0, -1]], float)
+    cone = np.array([[0, 0, 0, -1, 0, 0], [0, -1, 0, 0, 0, 0], [0, 0, -1, 0, 0, 0]], float)
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    solver = clarabel.DefaultSolver(sp.csc_matrix((6, 6)), np.array([-1.0, 0, 0, 0, 0, 0]),
+                                    sp.csc_matrix(np.vstack([equal, nonneg, cone])),
+                                    np.array([0, 0, 0, 1, 0, 0, 0, 0, 0, 0], float),
+                                    [clarabel.ZeroConeT(3), clarabel.NonnegativeConeT(4),
+                                     clarabel.SecondOrderConeT(3)], settings)
+    return float(solver.solve().x[0])
+
+
+def friction() -> None:
+    """Print the exact ring friction beside the box and the double cone (module docstring)."""
+    places = 720
+    theta = 2.0 * np.pi * np.arange(places) / places
+    profiles = {"evenly pressed": np.full(places, 1.0 / (2.0 * np.pi)),
+                "tilted to the ring limit": (1.0 + np.cos(theta)) / (2.0 * np.pi)}
+    loads = {"shear along x (the tilt's plane)": (1, 0, 0), "shear along y": (0, 1, 0), "twist": (0, 0, 1),
+             "box corner (1, 1, 1)": (1, 1, 1), "box corner (1, 1, -1)": (1, 1, -1),
+             "shear x and twist (1, 0, 1)": (1, 0, 1)}
+    print("load (normalised)                  | profile                  | ring carries | box allows | double cone"
+          " | strategies' hull")
+    for name, pressure in profiles.items():
+        even = 2.0 * np.pi * pressure.min()
+        for label, load in loads.items():
+            v = np.array(load, dtype=float) / np.linalg.norm(load)
+            exact = _ring_carries(pressure, v)
+            box = (1.0 / math.sqrt(3.0)) / np.abs(v).max()
+            cone = even / (np.hypot(v[0], v[1]) + abs(v[2]))
+            hull = _hull_carries(pressure, v)
+            print(f"{label:34s} | {name:24s} | {exact:12.3f} | {box:10.3f} | {cone:11.3f} | {hull:16.3f}")
+
+
 if __name__ == "__main__":
     if len(sys.argv) >= 3 and sys.argv[1] == "samples":
         for arg in sys.argv[2:]:
@@ -320,6 +410,8 @@ if __name__ == "__main__":
             lag(name, int(text))
     elif len(sys.argv) == 2 and sys.argv[1] == "peel":
         peel()
+    elif len(sys.argv) == 2 and sys.argv[1] == "friction":
+        friction()
     elif len(sys.argv) >= 6 and sys.argv[1] == "ring":
         ring(float(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4]), [float(a) for a in sys.argv[5:]])
     else:

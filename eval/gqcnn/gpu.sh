@@ -14,6 +14,14 @@
 #      object-wise validation split (eval/bin/heldout.py).
 # OUT gets log.txt, heldout.jsonl, dataset_card.json, and per arch <arch>.json (its model card); the
 # first arch's weights and PR curve too (<arch>.safetensors, <arch>_pr.png).
+# The lent H200 had torch 2.11 but not the project's dependencies and no network. They went along as
+# cp312 manylinux wheels (trimesh, embreex, rtree, manifold3d, qpsolvers, clarabel, cffi, pycparser,
+# tomli-w, mujoco 3.17.0 without its mujoco/experimental folder, pyopengl, glfw, gymnasium,
+# farama-notifications, typer, pydantic, pydantic-core, annotated-types, typing-inspection) with the
+# EGL loader packages (libegl1, libglvnd0, libopengl0, libgl1, libglx0, libgles2), set up before
+# this script ran with: `dpkg -x` of each .deb into /, ldconfig, __EGL_VENDOR_LIBRARY_FILENAMES at
+# the driver's 10_nvidia.json, each wheel unpacked (`python3 -m zipfile -e`) into /tmp/site,
+# PYTHONPATH=/tmp/site MUJOCO_GL=egl, `pip install --no-deps --no-build-isolation --no-index -e .`.
 set -u
 OUT=${1:?output directory}
 BUDGET=${2:-560}

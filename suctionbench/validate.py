@@ -69,6 +69,7 @@ OPTION_RULES: dict[str, Rule] = {
     "seed": Rule(0, SEED_MAX, meaning="seeds are non-negative integers"),
     "workers": CORES,
     "cores": CORES,
+    "load_threads": Rule(1, 4096, meaning="threads reading the dataset's shards"),
     # counts
     "trials": COUNT, "datapoints": COUNT, "grasps": COUNT, "grasps_per_object": COUNT, "samples": COUNT,
     "epochs": COUNT, "batch_size": Rule(1, 2**20), "max_datapoints": COUNT, "max_val_datapoints": COUNT,

@@ -499,10 +499,14 @@ def _assemble_shards(out: Path, units: list[Unit], writer: Any, per_shard: int, 
     """
     counts, positives, image_ids, object_ids = [], 0, [], []
     for unit in units:
-        with np.load(unit_path(out, unit.index)) as data:
-            image_ids.append(data["image_labels"])
-            object_ids.append(data["object_labels"])
-            positives += int((data["robust_suction_wrench_resistance"] > threshold).sum())
+        path = unit_path(out, unit.index)
+        try:
+            with np.load(path) as data:
+                image_ids.append(data["image_labels"])
+                object_ids.append(data["object_labels"])
+                positives += int((data["robust_suction_wrench_resistance"] > threshold).sum())
+        except Exception as exc:  # as load_unit: whatever the zip or the array says, the unit is unusable
+            raise InputError(f"unit file '{path}': corrupt ({type(exc).__name__})") from None
         counts.append(len(image_ids[-1]))
     starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     total = int(starts[-1])

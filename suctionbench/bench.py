@@ -184,7 +184,9 @@ def bench_episode(*, object_key: str, episodes: int, cores: int, seed: int) -> d
 
 def bench_generate(*, objects: str, datapoints: int, workers: int, seed: int) -> dict[str, Any]:
     """Datapoints/s of dataset generation with all workers vs one worker (the serial reference)
-    on the same configuration, render ms per frame, robust-label ms per grasp, and peak memory."""
+    on the same configuration, and its shard assembly on `workers` threads vs one (the two
+    datasets' shards must be the same bytes); render ms per frame, robust-label ms per grasp, and
+    peak memory."""
     import tempfile
     from pathlib import Path
 
@@ -204,12 +206,14 @@ def bench_generate(*, objects: str, datapoints: int, workers: int, seed: int) ->
     records = resolve_objects(objects)
     dirs, keys = [str(r.directory) for r in records], [r.key for r in records]
     config = GenerationConfig(datapoints=datapoints, seed=seed)
-    rates = {}
+    rates, assembly = {}, {}
     with tempfile.TemporaryDirectory(dir=scratch) as tmp:
         for label, count in (("parallel", workers), ("serial", 1)):
             start = time.perf_counter()
             card = generate_dataset(Path(tmp) / label, dirs, keys, "primesense", config, workers=count)
             rates[label] = card["datapoints"] / (time.perf_counter() - start)
+            assembly[label] = float(card["generation_runs"][-1]["assembly_seconds"])
+        same_shards = _same_files(Path(tmp) / "parallel" / "tensors", Path(tmp) / "serial" / "tensors")
     intrinsics = camera_preset("primesense")
     rng = np.random.default_rng(seed)
     with TableScene(records[0], intrinsics) as scene:
@@ -234,12 +238,25 @@ def bench_generate(*, objects: str, datapoints: int, workers: int, seed: int) ->
         "datapoints_per_s_per_core": round(rates["parallel"] / workers, 1),
         "serial_datapoints_per_s": round(rates["serial"], 1),
         "parallel_speedup": round(rates["parallel"] / rates["serial"], 2),
+        "assembly_s": assembly["parallel"],  # the shards cut from the units on `workers` threads ...
+        "serial_assembly_s": assembly["serial"],  # ... and on one
+        "assembly_speedup": round(assembly["serial"] / max(assembly["parallel"], 1e-3), 2),
+        "same_shards": same_shards,  # both runs' shard files byte for byte equal
         "render_ms_per_frame": round(render_ms, 2),
         "label_ms_per_grasp": round(label_ms, 3),
         "positive_rate": card["positive_rate"],
         "max_rss_mb_main": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),
         "max_rss_mb_worker": round(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024, 1),
     }
+
+
+def _same_files(a, b) -> bool:
+    """Whether folders `a` and `b` hold the same file names with the same bytes."""
+    import filecmp
+
+    names = sorted(p.name for p in a.iterdir())
+    return names == sorted(p.name for p in b.iterdir()) and all(
+        filecmp.cmp(a / name, b / name, shallow=False) for name in names)
 
 
 def bench_plan(*, policies: list[str], model: str | None, scenes: int, seed: int, cores: int) -> dict[str, Any]:

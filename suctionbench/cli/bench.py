@@ -132,7 +132,8 @@ def bench_generate_cmd(
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
-    """Dataset generation datapoints/s (all cores vs one), render ms/frame, label ms/grasp, memory."""
+    """Dataset generation datapoints/s and shard assembly s (all cores vs one, same shards), render ms/frame,
+    label ms/grasp, memory."""
 
     _run_bench(as_json, "bench generate", "bench_generate", objects=objects, datapoints=datapoints,
                workers=resolve_workers(workers), seed=seed)

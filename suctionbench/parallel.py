@@ -131,10 +131,24 @@ def _start_worker(parent_pid: int, threads: int) -> None:
     share of the cores (`threads`) unless the user sized them. N workers that each start a pool of
     every core's threads oversubscribe the machine: the small, many network calls of a GQ-CNN plan
     then wait on each other's spinning threads (20 fc-gqcnn trials on basic, 2 workers, 2 idle
-    cores: plan time mean 1.745 s, median 0.487 s with full pools; 0.226 s, 0.106 s shared)."""
+    cores: plan time mean 1.745 s, median 0.487 s with full pools; 0.226 s, 0.106 s shared).
+
+    The environment variables reach only libraries loaded later (torch). numpy's BLAS is already
+    loaded when this runs (unpickling this function imports suctionbench, hence numpy) and sized
+    its pool from every core: threadpoolctl limits the pools already loaded too. Unlimited, 16
+    dataset workers on a 16-core machine ran 16 BLAS threads each, which spun: 10x the CPU time
+    of the work, and no faster than 4 workers (eval/gqcnn/README.md, "On a lent GPU")."""
     die_with_parent(parent_pid)
+    if any(name in os.environ for name in THREAD_VARIABLES):
+        limit = None  # the user sized them: leave their pools as they asked
+    else:
+        limit = threads
     for name in THREAD_VARIABLES:
         os.environ.setdefault(name, str(threads))
+    if limit is not None:
+        from threadpoolctl import threadpool_limits
+
+        threadpool_limits(limits=limit)
 
 
 def map_ordered(

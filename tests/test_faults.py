@@ -81,9 +81,17 @@ def _threads() -> tuple[str, int]:
     return os.environ["OMP_NUM_THREADS"], torch.get_num_threads()
 
 
+def _blas_threads() -> list[int]:
+    from threadpoolctl import threadpool_info
+
+    return [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
+
+
 def test_pool_workers_share_the_cores(monkeypatch):
     # Each of N workers gets cpu_count // N threads for torch (and OpenMP / BLAS): N full-size
-    # pools on the same cores oversubscribe them. A size the user set is kept.
+    # pools on the same cores oversubscribe them. A size the user set is kept. numpy's BLAS is
+    # loaded before the worker's first call can set the environment (its pool sized from every
+    # core), so its pool must be limited where it runs: one thread here, not the machine's count.
     from suctionbench.parallel import THREAD_VARIABLES, process_pool
 
     for name in THREAD_VARIABLES:
@@ -91,6 +99,8 @@ def test_pool_workers_share_the_cores(monkeypatch):
     monkeypatch.setattr(os, "cpu_count", lambda: 2)
     with process_pool(2) as pool:
         assert pool.submit(_threads).result() == ("1", 1)
+        blas = pool.submit(_blas_threads).result()
+        assert blas and all(n == 1 for n in blas), blas
     monkeypatch.setenv("OMP_NUM_THREADS", "7")
     with process_pool(2) as pool:
         assert pool.submit(_threads).result()[0] == "7"

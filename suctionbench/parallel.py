@@ -139,16 +139,13 @@ def _start_worker(parent_pid: int, threads: int) -> None:
     dataset workers on a 16-core machine ran 16 BLAS threads each, which spun: 10x the CPU time
     of the work, and no faster than 4 workers (eval/gqcnn/README.md, "On a lent GPU")."""
     die_with_parent(parent_pid)
-    if any(name in os.environ for name in THREAD_VARIABLES):
-        limit = None  # the user sized them: leave their pools as they asked
-    else:
-        limit = threads
+    user_sized = any(name in os.environ for name in THREAD_VARIABLES)  # then their pools are as asked
     for name in THREAD_VARIABLES:
         os.environ.setdefault(name, str(threads))
-    if limit is not None:
+    if not user_sized:
         from threadpoolctl import threadpool_limits
 
-        threadpool_limits(limits=limit)
+        threadpool_limits(limits=threads)
 
 
 def map_ordered(

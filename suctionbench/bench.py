@@ -19,12 +19,17 @@ def _limit_cores(cores: int) -> int:
     """Pin this process to the first `cores` CPUs (0 = leave as is); returns the count in use.
 
     Must run before the first ray cast: Embree's thread pool sizes itself from the affinity mask.
+    The mask binds the calling thread and the threads it starts later, not numpy's BLAS pool,
+    started when numpy was imported with a thread per core: that pool is cut to `cores` threads.
     """
     available = sorted(os.sched_getaffinity(0))
     if cores < 0:
         raise InputError(f"--cores {cores}: must be >= 0")
     if cores:
         os.sched_setaffinity(0, set(available[:cores]))
+        from threadpoolctl import threadpool_limits
+
+        threadpool_limits(limits=cores)
     return len(os.sched_getaffinity(0))
 
 

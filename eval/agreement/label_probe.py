@@ -36,7 +36,7 @@ Usage:
       cone program), for an evenly pressed lip and for one tilted to the ring limit (p = p0 (1 +
       cos theta), lifted at theta = pi), beside what the paper's sqrt(3) box, the even share's
       double cone |f_t| + |tau_z| / r <= mu 2 pi min p and the hull of the ring's two pure
-      strategies (all the lip sliding one way, or all twisting; `_hull_carries`) allow. Units:
+      strategies (all the lip sliding one way, or all twisting; `_hull_carries`, in closed form) allow. Units:
       f / (mu f_N), tau_z / (r mu f_N).
 """
 
@@ -311,6 +311,12 @@ def ring(normal: float, places: int, bearing: float, amplitudes: list[float]) ->
               f"{held * 1e3:.2f} mN m")
 
 
+def _ring(pressure: np.ndarray) -> tuple[np.ndarray, float]:
+    """The ring's tangents e_k (K, 2) at its places (`wrench.lip_angles`) and each place's arc (rad)."""
+    theta = wrench.lip_angles(len(pressure))
+    return np.stack([-np.sin(theta), np.cos(theta)], axis=1), 2.0 * np.pi / len(pressure)
+
+
 def _ring_carries(pressure: np.ndarray, load: np.ndarray) -> float:
     """Largest s such that the ring (radius 1, pressure per unit angle `pressure` at equally spaced
     places, friction coefficient 1) carries s * load = (f_x, f_y, tau_z): tractions t_k with
@@ -318,19 +324,18 @@ def _ring_carries(pressure: np.ndarray, load: np.ndarray) -> float:
     import clarabel
     import scipy.sparse as sp
 
+    tangent, arc = _ring(pressure)
     places = len(pressure)
-    theta = 2.0 * np.pi * np.arange(places) / places
-    tangent = np.stack([-np.sin(theta), np.cos(theta)], axis=1)
     n = 1 + 2 * places  # s, then (t_x, t_y) per place
     equal = np.zeros((3, n))
     equal[:, 0] = -load
     equal[0, 1::2], equal[1, 2::2] = 1.0, 1.0
     equal[2, 1::2], equal[2, 2::2] = tangent[:, 0], tangent[:, 1]
     cones = np.zeros((3 * places, n))
+    cones[3 * np.arange(places) + 1, 1 + 2 * np.arange(places)] = -1.0
+    cones[3 * np.arange(places) + 2, 2 + 2 * np.arange(places)] = -1.0
     bound = np.zeros(3 * places)
-    for k in range(places):
-        bound[3 * k] = pressure[k] * 2.0 * np.pi / places
-        cones[3 * k + 1, 1 + 2 * k], cones[3 * k + 2, 2 + 2 * k] = -1.0, -1.0
+    bound[0::3] = pressure * arc
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     cost = np.zeros(n)
@@ -343,39 +348,22 @@ def _ring_carries(pressure: np.ndarray, load: np.ndarray) -> float:
 
 def _hull_carries(pressure: np.ndarray, load: np.ndarray) -> float:
     """Largest s such that s * load lies in the hull of the ring's two pure strategies (module
-    docstring, friction): all the pressure sliding one way u, (F u, c . u), or twisting one way,
-    +-(c, F), with F = sum p dtheta = f_N and c = sum p_k e_k dtheta (only p's first harmonic, the
-    tilt, enters). Mixtures split the pressure: s load = (F y + l c, c . y + l F), |y| <= a,
-    a + |l| <= 1."""
-    import clarabel
-    import scipy.sparse as sp
-
-    places = len(pressure)
-    theta = 2.0 * np.pi * np.arange(places) / places
-    tangent = np.stack([-np.sin(theta), np.cos(theta)], axis=1)
-    total = float(pressure.sum() * 2.0 * np.pi / places)
-    c = (pressure[:, None] * tangent).sum(axis=0) * 2.0 * np.pi / places
-    # x = (s, y_x, y_y, a, l_plus, l_minus)
-    equal = np.array([[-load[0], total, 0.0, 0.0, c[0], -c[0]],
-                      [-load[1], 0.0, total, 0.0, c[1], -c[1]],
-                      [-load[2], c[0], c[1], 0.0, total, -total]])
-    nonneg = np.array([[0, 0, 0, 1, 1, 1], [0, 0, 0, -1, 0, 0], [0, 0, 0, 0, -1, 0], [0, 0, 0, 0, 0, -1]], float)
-    cone = np.array([[0, 0, 0, -1, 0, 0], [0, -1, 0, 0, 0, 0], [0, 0, -1, 0, 0, 0]], float)
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    solver = clarabel.DefaultSolver(sp.csc_matrix((6, 6)), np.array([-1.0, 0, 0, 0, 0, 0]),
-                                    sp.csc_matrix(np.vstack([equal, nonneg, cone])),
-                                    np.array([0, 0, 0, 1, 0, 0, 0, 0, 0, 0], float),
-                                    [clarabel.ZeroConeT(3), clarabel.NonnegativeConeT(4),
-                                     clarabel.SecondOrderConeT(3)], settings)
-    return float(solver.solve().x[0])
+    docstring, friction; eval/README.md's closed form): all the pressure sliding one way u,
+    (F u, c . u), or twisting one way, +-(c, F), with F = sum p dtheta = f_N and c = sum p_k e_k
+    dtheta (only p's first harmonic, the tilt, enters). A load (f, tau) is in the hull iff
+    ||f - l c|| + |l| F <= F with the mixture's twisting share l = (tau - c . f / F) F / (F^2 - |c|^2);
+    l is linear in the load, so the largest multiple is F / (||f - l c|| + |l| F) at s = 1."""
+    tangent, arc = _ring(pressure)
+    total = float(pressure.sum() * arc)
+    c = (pressure[:, None] * tangent).sum(axis=0) * arc
+    share = (load[2] - c @ load[:2] / total) * total / (total**2 - c @ c)
+    return total / (float(np.linalg.norm(load[:2] - share * c)) + abs(share) * total)
 
 
 def friction() -> None:
     """Print the exact ring friction beside the box and the double cone (module docstring)."""
-    places = 720
-    theta = 2.0 * np.pi * np.arange(places) / places
-    profiles = {"evenly pressed": np.full(places, 1.0 / (2.0 * np.pi)),
+    theta = wrench.lip_angles(720)
+    profiles = {"evenly pressed": np.full(len(theta), 1.0 / (2.0 * np.pi)),
                 "tilted to the ring limit": (1.0 + np.cos(theta)) / (2.0 * np.pi)}
     loads = {"shear along x (the tilt's plane)": (1, 0, 0), "shear along y": (0, 1, 0), "twist": (0, 0, 1),
              "box corner (1, 1, 1)": (1, 1, 1), "box corner (1, 1, -1)": (1, 1, -1),

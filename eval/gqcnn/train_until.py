@@ -14,9 +14,9 @@ JSON line per epoch on stdout. Used by eval/gqcnn/gpu.sh.
 
 import argparse
 import json
-import shlex
 import time
 
+from suctionbench.cli.train import train_command
 from suctionbench.learning.train import TrainConfig, train
 
 
@@ -40,13 +40,7 @@ def main() -> None:
         config = TrainConfig(arch=args.arch, epochs=epochs, device=args.device, split="object_wise",
                              max_val_datapoints=args.max_val_datapoints, target=args.target,
                              average=args.average, load_threads=args.load_threads, seed=args.seed)
-        command = shlex.join([
-            "suctionbench", "train", "--dataset", args.dataset, "--out", args.out, "--arch", args.arch,
-            "--epochs", str(epochs), "--device", args.device, "--split", "object_wise", "--batch-size", "64",
-            "--max-val-datapoints", str(args.max_val_datapoints), "--augment", "--target", args.target,
-            "--seed", str(args.seed), "--average", str(args.average), "--load-threads", str(args.load_threads),
-        ])
-        metrics = train(args.dataset, args.out, config, command=command)
+        metrics = train(args.dataset, args.out, config, command=train_command(args.dataset, args.out, config))
         last = time.time() - start
         keys = ("val_accuracy", "val_ap", "fit_accuracy", "fit_ap", "train_accuracy", "train_images_per_s")
         print(json.dumps({"arch": args.arch, "epoch": epochs, "seconds": round(last, 1),

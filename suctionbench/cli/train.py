@@ -41,6 +41,25 @@ def _train_progress(enabled: bool) -> Iterator[Callable[[Any], None]]:
         yield update
 
 
+def train_command(dataset: Path | str, out: Path | str, config: Any) -> str:
+    """The `suctionbench train` command line that runs `config` (a TrainConfig made from this
+    command's options) on `dataset` into `out`, every option spelled out, defaults included: the
+    model card's command reproduces the run even if defaults change."""
+    import shlex
+
+    return shlex.join([
+        "suctionbench", "train", "--dataset", str(dataset), "--out", str(out), "--arch", config.arch, "--epochs",
+        str(config.epochs), "--device", config.device, "--split", config.split, "--batch-size", str(config.batch_size),
+        *(["--max-datapoints", str(config.max_train_datapoints)] if config.max_train_datapoints else []),
+        *(["--max-val-datapoints", str(config.max_val_datapoints)] if config.max_val_datapoints else []),
+        "--augment" if config.augment.enabled else "--no-augment", "--target", config.target,
+        "--seed", str(config.seed),
+        *(["--init", config.init] if config.init else []),
+        *(["--average", str(config.average)] if config.average is not None else []),
+        "--load-threads", str(config.load_threads),
+    ])
+
+
 @app.command("train")
 def train_cmd(
     dataset: Annotated[Path, typer.Option(help="Dataset directory (from `suctionbench generate`).")],
@@ -73,8 +92,6 @@ def train_cmd(
     """Train a GQ-CNN on a dataset; resumes a run of the same configuration found in --out."""
 
     def body() -> dict[str, Any]:
-        import shlex
-
         from suctionbench.dataset.verify import check_dataset, record_check
         from suctionbench.learning.data import AUGMENT_GQCNN, AUGMENT_OFF
         from suctionbench.learning.train import TrainConfig, train
@@ -85,19 +102,9 @@ def train_cmd(
                              max_train_datapoints=max_datapoints, max_val_datapoints=max_val_datapoints,
                              augment=AUGMENT_GQCNN if augment else AUGMENT_OFF, target=target, seed=seed,
                              init=init, average=average, load_threads=load_threads)
-        # Every option spelled out, defaults included: the card's command reproduces the run even if defaults change.
-        command = shlex.join([
-            "suctionbench", "train", "--dataset", str(dataset), "--out", str(out), "--arch", arch, "--epochs",
-            str(epochs), "--device", device, "--split", split, "--batch-size", str(batch_size),
-            *(["--max-datapoints", str(max_datapoints)] if max_datapoints else []),
-            *(["--max-val-datapoints", str(max_val_datapoints)] if max_val_datapoints else []),
-            "--augment" if augment else "--no-augment", "--target", target, "--seed", str(seed),
-            *(["--init", init] if init else []),
-            *(["--average", str(average)] if average is not None else []),
-            "--load-threads", str(load_threads),
-        ])
         with _train_progress(not as_json) as update:
-            metrics = train(dataset, out, config, progress=update, command=command, overwrite=overwrite)
+            metrics = train(dataset, out, config, progress=update, command=train_command(dataset, out, config),
+                            overwrite=overwrite)
         record_check(dataset, checked)
         if not as_json:
             keys = ("arch", "epochs", "train_accuracy", "val_accuracy", "val_ap", "train_images_per_s", "out")

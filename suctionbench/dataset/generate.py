@@ -18,7 +18,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
@@ -339,14 +338,15 @@ def save_unit(directory: Path, index: int, arrays: dict[str, np.ndarray]) -> Non
         np.savez(fh, **arrays)
 
 
-def load_unit(directory: Path, index: int) -> dict[str, np.ndarray] | None:
-    """A unit file's arrays, or None if missing; raises InputError if it is corrupt."""
+def load_unit(directory: Path, index: int, fields: tuple[str, ...] = UNIT_FIELDS) -> dict[str, np.ndarray] | None:
+    """A unit file's arrays (only `fields`: an ``.npz`` reads just the members asked for), or None
+    if missing; raises InputError if it is corrupt."""
     path = unit_path(directory, index)
     if not path.exists():
         return None
     try:
         with np.load(path) as data:
-            arrays = {name: data[name] for name in UNIT_FIELDS}
+            arrays = {name: data[name] for name in fields}
     except Exception as exc:  # zip/pickle/key errors all mean the same: not a valid unit
         raise InputError(f"unit file '{path}': corrupt ({type(exc).__name__})") from None
     lengths = {len(a) for a in arrays.values()}
@@ -451,8 +451,7 @@ def generate_dataset(
 
     writer = DatasetWriter(out, datapoints_per_shard=config.datapoints_per_shard)
     assemble = time.perf_counter()
-    threads = workers if workers > 0 else (os.cpu_count() or 1)
-    stats = _assemble_shards(out, units, writer, config.datapoints_per_shard, config.label_threshold, threads)
+    stats = _assemble_shards(out, units, writer, config.datapoints_per_shard, config.label_threshold, max(1, workers))
     write_splits(out, stats.pop("image_ids"), stats.pop("object_ids"), val_fraction=0.2, seed=config.seed)
     this_run["assembly_seconds"] = round(time.perf_counter() - assemble, 1)
     card.update(stats, status="complete", regenerated_corrupt_units=corrupt, rewritten_shard_problems=shard_problems,
@@ -499,14 +498,10 @@ def _assemble_shards(out: Path, units: list[Unit], writer: Any, per_shard: int, 
     """
     counts, positives, image_ids, object_ids = [], 0, [], []
     for unit in units:
-        path = unit_path(out, unit.index)
-        try:
-            with np.load(path) as data:
-                image_ids.append(data["image_labels"])
-                object_ids.append(data["object_labels"])
-                positives += int((data["robust_suction_wrench_resistance"] > threshold).sum())
-        except Exception as exc:  # as load_unit: whatever the zip or the array says, the unit is unusable
-            raise InputError(f"unit file '{path}': corrupt ({type(exc).__name__})") from None
+        labels = load_unit(out, unit.index, ("image_labels", "object_labels", "robust_suction_wrench_resistance"))
+        image_ids.append(labels["image_labels"])
+        object_ids.append(labels["object_labels"])
+        positives += int((labels["robust_suction_wrench_resistance"] > threshold).sum())
         counts.append(len(image_ids[-1]))
     starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     total = int(starts[-1])

@@ -5,11 +5,12 @@ string entry point, so registration costs only the import of gymnasium: MuJoCo, 
 the analytic labeller are imported when an environment is first made. Ids are versioned; a
 change of physics, spaces or reward makes a new ``-vN`` rather than changing an existing one, so
 results reported against an id stay comparable. v1 (2026-11-26): the simulated vacuum pulls along
-the cup's axis however an object's collision geometry is decomposed (eval/README.md); making a
-``-v0`` id raises gymnasium's DeprecatedEnv, naming the ``-v1`` to use.
+the cup's axis however an object's collision geometry is decomposed; v2 (2026-11-26): the leak test
+measures the object's real surface behind its convex parts (eval/README.md). Making an older id
+raises gymnasium's DeprecatedEnv, naming the ``-v2`` to use.
 
     >>> import gymnasium, suctionbench
-    >>> env = gymnasium.make("suctionbench/SuctionPick-v1", object_set="basic")
+    >>> env = gymnasium.make("suctionbench/SuctionPick-v2", object_set="basic")
 """
 
 from __future__ import annotations
@@ -19,8 +20,8 @@ from typing import Any
 import gymnasium
 
 ENVIRONMENTS: dict[str, str] = {
-    "suctionbench/SuctionPick-v1": "suctionbench.envs.suction_pick:SuctionPickEnv",
-    "suctionbench/SuctionBin-v1": "suctionbench.envs.suction_bin:SuctionBinEnv",
+    "suctionbench/SuctionPick-v2": "suctionbench.envs.suction_pick:SuctionPickEnv",
+    "suctionbench/SuctionBin-v2": "suctionbench.envs.suction_bin:SuctionBinEnv",
 }
 """Environment id -> entry point ("module:Class"), imported only by gymnasium.make."""
 

@@ -1,4 +1,4 @@
-"""`suctionbench/SuctionPick-v1`: the benchmark's simulated pick as a gymnasium environment.
+"""`suctionbench/SuctionPick-v2`: the benchmark's simulated pick as a gymnasium environment.
 
 The environment is a thin layer over `suctionbench.sim.pick.PickRunner`: the runner builds the
 scene, places the object, renders the observation and executes the pick; this module only maps
@@ -159,7 +159,7 @@ class SuctionPickEnv(gymnasium.Env):
 
     ```python
     gymnasium.make(
-        "suctionbench/SuctionPick-v1",
+        "suctionbench/SuctionPick-v2",
         object_set="basic",         # basic, typical, adversarial, or a user set (suctionbench objects list)
         cup="default",              # cup preset (suctionbench.config.CUP_PRESETS), shared by sim and label
         camera="primesense",        # camera preset or intrinsics TOML file; sets H, W of the images
@@ -180,6 +180,10 @@ class SuctionPickEnv(gymnasium.Env):
     ## Version history
 
     - v0: initial version.
+    - v1 (2026-11-26): the simulated vacuum pulls along the cup's axis however an object's collision
+      geometry is decomposed.
+    - v2 (2026-11-26): the leak test measures the object's real surface behind the convex parts
+      the lip rests on, so concavities the parts span (drain ribs, tooth gaps) leak.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 1}

@@ -18,6 +18,10 @@ TORSIONAL_FRICTION = 0.005
 ROLLING_FRICTION = 0.0001
 """Rolling friction (m) of object geoms."""
 
+VISUAL_GROUP = 2
+"""Geom group of the objects' surface meshes (rendered; no contacts): the object's real surface,
+which its convex parts only approximate (`suctionbench.sim.suction`'s leak test measures both)."""
+
 CONTACT_SOLREF = (0.005, 1.0)
 """MuJoCo solref of object contacts (5 ms, critically damped): rigid objects, stiffer than the
 default 20 ms so that drops do not sink objects into each other."""
@@ -60,7 +64,7 @@ def add_object_body(
     vmesh.userface = np.asarray(visual.faces, dtype=np.int32).ravel().tolist()
     body.add_geom(
         name=f"{name}_visual", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=vmesh.name,
-        contype=0, conaffinity=0, group=2, density=0.0, rgba=[0.8, 0.55, 0.3, 1.0],
+        contype=0, conaffinity=0, group=VISUAL_GROUP, density=0.0, rgba=[0.8, 0.55, 0.3, 1.0],
     )
     return body
 

@@ -368,10 +368,8 @@ def expose_to_vacuum(body: mujoco.MjsBody) -> None:
     """Let the cup act on `body`: its colliding geoms accept the vacuum probe's contacts and join
     SURFACE_GROUP, the surface the leak test measures.
 
-    The leak test measures the collision geometry, not the surface mesh: the lip rests on the
-    former, and where a convex decomposition bridges a shallow concavity by a millimetre (inside a
-    bowl, across a mug's side) the lip, resting on the bridge, would otherwise see a gap all round.
-    The price: a groove or hole the decomposition fills does not leak in the simulation."""
+    The lip rests on the collision geometry; the leak test measures it and, behind it, the surface
+    mesh, where a groove or hole the decomposition fills still leaks (`SuctionController.measure_lip`)."""
     for geom in body.geoms:
         if geom.contype or geom.conaffinity:
             geom.conaffinity = geom.conaffinity | VACUUM_CONTYPE

@@ -3,9 +3,10 @@ vacuum and the seal, stepped with the simulation.
 
 Vacuum. `SuctionController` runs a leak test while the vacuum is commanded and lip points touch an
 object: it measures the gap between the lip's edge and that object's surface at `leak_samples`
-places round the lip circle (`mujoco.mj_multiRay`, one call, against the object's collision
-geometry, where the lip rests), from the distance at which a pressed lip rests (the contact
-margin), and integrates the leak area A = sum max(gap - seal_gap, 0) x arc, the seal_gap allowance
+places round the lip circle (`mujoco.mj_multiRay` against the object's collision geometry, where
+the lip rests, from the distance at which a pressed lip rests, the contact margin; and a second
+call against its surface mesh, where the air leaks past a lip that can fold only so far toward it:
+`measure_lip`), and integrates the leak area A = sum max(gap - seal_gap, 0) x arc, the seal_gap allowance
 only where the lip is pressed on (folded: an unfolded, lifted lip carries no pressure and closes
 nothing). The ejector holds the vacuum p(A) where its flow curve meets the leak's orifice flow
 (`suctionbench.vacuum.equilibrium_vacuum`); the cup's pressure follows p(A) with a first-order time
@@ -31,6 +32,7 @@ import math
 import mujoco
 import numpy as np
 
+from suctionbench.objects.mjcf import VISUAL_GROUP
 from suctionbench.sim.cup import SURFACE_GROUP, VACUUM_CONTYPE, CupHandles
 from suctionbench.vacuum import equilibrium_vacuum
 
@@ -87,6 +89,15 @@ class SuctionController:
         """Geoms whose vacuum bit `_aim_vacuum` has taken for `_receiver` (given back by `_unmute`)."""
         self._fold_weights = _periodic_interpolation(self._phi, n) if n else np.zeros((k, 0))
         """(k, n): the lip's fold at each leak-test place, linear between its points round the circle."""
+        self._plane = np.column_stack([np.ones(k), np.cos(self._phi), np.sin(self._phi)])
+        """(k, 3): the lip plane's mean and tilt at the leak test's places (`surface_offsets`)."""
+        self._visual_group = np.zeros(6, dtype=np.uint8)
+        self._visual_group[VISUAL_GROUP] = 1
+        self._true_geom = np.zeros(k, dtype=np.int32)
+        self._true_dist = np.zeros(k)
+        self._true_normal = np.zeros((k, 3))
+        self._surface_geom: dict[int, int] = {}
+        """Per object body: its surface-mesh geom (-1: none; its collision geometry is its surface)."""
 
     # -- read-outs --------------------------------------------------------------------------------
     def compression(self, data: mujoco.MjData) -> float:
@@ -235,18 +246,43 @@ class SuctionController:
         return self._fold_weights @ data.qpos[self.lip_qpos]
 
     def lip_gaps(self, data: mujoco.MjData, body: int, folds: np.ndarray | None = None) -> np.ndarray:
-        """Gap (m) between the lip's edge and `body`'s surface at the leak test's places round the lip
-        circle, measured along the cup axis from where a pressed lip rests; `cup.radius` where the
-        surface is missing (over an edge, another body in the way). `folds`: `lip_folds(data)`, if
-        the caller has it.
+        """Gap (m) between the lip's edge and `body`'s convex parts (where the lip rests) at the leak
+        test's places round the lip circle: `measure_lip`'s first result."""
+        return self.measure_lip(data, body, folds, surface=False)[0]
 
-        Where the lip rests: a lip sphere (radius rho) pressed on a surface sloping by alpha to the
-        lip plane sits with its centre rho + margin from the surface, so its lowest point is
-        (rho + margin) / cos(alpha) - rho above the surface along the axis (margin on a parallel
-        face). That is the rounded sphere's geometry, not a gap of the thin lip it stands for.
-        Slopes beyond 45 deg are walls (a groove's side, an object's side face), not surfaces a lip
-        rests on: the correction stops growing there."""
-        cup, sim = self.cup, self.sim
+    def surface_offsets(self, data: mujoco.MjData, body: int, folds: np.ndarray | None = None) -> np.ndarray:
+        """How much further `body`'s real surface lies than its convex parts: `measure_lip`'s second
+        result."""
+        return self.measure_lip(data, body, folds)[1]
+
+    def measure_lip(
+        self, data: mujoco.MjData, body: int, folds: np.ndarray | None = None, *, surface: bool = True
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """(gaps, offsets) at the leak test's places round the lip circle, both along the cup axis
+        (m). `folds`: `lip_folds(data)`, if the caller has it; `surface` False skips the offsets.
+
+        gaps: between the lip's edge and `body`'s convex parts, from where a pressed lip rests;
+        `cup.radius` where they are missing (over an edge, another body in the way). A lip sphere
+        (radius rho) pressed on a surface sloping by alpha to the lip plane sits with its centre
+        rho + margin from the surface, so its lowest point is (rho + margin) / cos(alpha) - rho
+        above the surface along the axis (margin on a parallel face). That is the rounded sphere's
+        geometry, not a gap of the thin lip it stands for. Slopes beyond 45 deg are walls (a
+        groove's side, an object's side face), not surfaces a lip rests on: the correction stops
+        growing there.
+
+        offsets: how much further `body`'s real surface (its surface mesh) lies than the parts,
+        relative to the lip's plane; nan where the ray that meets the parts finds no real surface
+        (a hole, a tooth gap the parts span); zeros for a body without a surface mesh (a primitive,
+        whose collision geometry is its surface). MuJoCo collides with convex parts, which span an
+        object's concavities: a soap dish's drain ribs, a gear's tooth gaps, the trough between a
+        toy's wheels (up to 5 mm under the lip in the agreement trials). A real lip follows the
+        real surface as far as it can fold; the bellows' plane settles where the lip's springs
+        have no net force or moment (the spring ring of docs/physics.md, "Lip preload"), so an
+        offset's mean and first harmonic move the plane and only the rest reaches the lip
+        (`_leak_area`). The real surface is a second ray cast from the same apex through the same
+        places, against the surface mesh (MuJoCo intersects a mesh geom's triangles in ray casts,
+        not its hull)."""
+        cup, sim, k = self.cup, self.sim, len(self._phi)
         rot, apex = self._apex(data)
         axis = rot[:, 2]
         # In the bellows' frame a lip place is (r cos phi, r sin phi, h + fold(phi)), the lip's edge
@@ -255,16 +291,37 @@ class SuctionController:
         depth = sim.ray_apex_height + (self.lip_folds(data) if folds is None else folds)
         length = np.sqrt(cup.radius**2 + depth * depth)
         local = np.column_stack([self._ring, depth]) / length[:, None]
-        rays = local @ rot.T
+        rays = (local @ rot.T).ravel()
         cutoff = float(length.max() + cup.radius)
-        mujoco.mj_multiRay(self.model, data, apex, rays.ravel(), self._group, 0, -1, self._ray_geom,
-                           self._ray_dist, self._ray_normal.ravel(), len(rays), cutoff)
-        hit = (self._ray_geom >= 0) & (self.model.geom_bodyid[self._ray_geom] == body)
+        mujoco.mj_multiRay(self.model, data, apex, rays, self._group, 0, -1, self._ray_geom,
+                           self._ray_dist, self._ray_normal.ravel(), k, cutoff)
+        parts = (self._ray_geom >= 0) & (self.model.geom_bodyid[self._ray_geom] == body)
         beyond = (self._ray_dist - length) * local[:, 2]  # axial distance from the lip's edge
         cos_slope = np.maximum(np.abs(self._ray_normal @ axis), _COS_WALL)
         rest = (sim.lip_sphere_radius + sim.contact_margin) / cos_slope - sim.lip_sphere_radius
-        gaps = np.where(hit, beyond - rest, cup.radius)
-        return np.clip(gaps, 0.0, cup.radius)
+        gaps = np.clip(np.where(parts, beyond - rest, cup.radius), 0.0, cup.radius)
+        mesh = self._surface_mesh(body) if surface else -1
+        if not surface or mesh < 0:
+            return gaps, (np.zeros(k) if surface else None)
+        mujoco.mj_multiRay(self.model, data, apex, rays, self._visual_group, 0, -1, self._true_geom,
+                           self._true_dist, self._true_normal.ravel(), k, cutoff)
+        real = self._true_geom == mesh
+        both = parts & real
+        offsets = np.where(both, (self._true_dist - self._ray_dist) * local[:, 2], 0.0)
+        # The plane is held by the springs that press (folded places); where fewer than three do,
+        # by every place that meets both surfaces.
+        carry = both & (depth < sim.ray_apex_height)
+        carry = carry if carry.sum() >= 3 else both
+        if carry.sum() >= 3:
+            offsets -= self._plane @ np.linalg.lstsq(self._plane[carry], offsets[carry], rcond=None)[0]
+        return gaps, np.where(parts & ~real, np.nan, offsets)
+
+    def _surface_mesh(self, body: int) -> int:
+        """`body`'s surface-mesh geom (`objects.mjcf.add_object_body`), -1 if it has none."""
+        if body not in self._surface_geom:
+            self._surface_geom[body] = mujoco.mj_name2id(
+                self.model, mujoco.mjtObj.mjOBJ_GEOM, f"{self.model.body(body).name}_visual")
+        return self._surface_geom[body]
 
     def _leak_area(self, data: mujoco.MjData, body: int) -> float:
         """Leak area (m^2) under the lip: the gap beyond what the lip's edge closes by itself, which
@@ -274,7 +331,17 @@ class SuctionController:
         while the lip pressure stays compressive). Without this, a lifting side kept its seal for
         another seal_gap and the simulated cup held 1.17x the ring limit's moment (now 1.01x)."""
         folds = self.lip_folds(data)
-        gaps, pressed = self.lip_gaps(data, body, folds), folds < 0.0
+        gaps, offsets = self.measure_lip(data, body, folds)
+        # Where the real surface lies further than the parts (offset > 0), the lip unfolds toward
+        # it by as much as it is folded (folds <= 0) and the rest opens the gap; no real surface at
+        # all: the whole arc is open. Offsets below the plane close nothing: the parts enclose the
+        # object, so the real surface is never nearer than they are, only the plane's shift makes
+        # it look so, and that shift is exact only while the whole lip presses (a lifting side's
+        # gap is a peel the parts measure as it is).
+        missing = np.isnan(offsets)
+        further = np.maximum(np.where(missing, 0.0, offsets), 0.0)
+        pressed = (folds + further < 0.0) & ~missing
+        gaps = np.where(missing, self.cup.radius, gaps + np.maximum(folds + further, 0.0))
         return float(np.sum(np.maximum(gaps - np.where(pressed, self.cup.seal_gap, 0.0), 0.0)) * self._arc)
 
     # -- the rigid reference ------------------------------------------------------------------------

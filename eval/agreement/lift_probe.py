@@ -11,6 +11,13 @@ Usage:
       relabel (the labeller only, no simulation) the trials of agreement.json that seal in the
       labeller and carry or score rwr >= 0.1; --no-sqrt3 drops the paper's sqrt(3) from the
       friction box (the most permissive box).
+  python eval/agreement/lift_probe.py bridge [AGREEMENT.json]
+      for the executed trials the simulation sealed and the labeller did not (default: the
+      agreement.json before the leak test measured the real surface, agreement_before_surface.json),
+      how far the object's convex parts (the collision geometry the simulated lip rests on) lie
+      above its real surface under the lip: rays along the approach through 48 places of the lip
+      circle round the grasp point, `mj_ray` on the parts and trimesh on the posed mesh; the
+      largest and smallest offset (mm) and the places where a part is met and no surface is.
 """
 
 from __future__ import annotations
@@ -129,11 +136,49 @@ def relabel(out: str, no_sqrt3: bool) -> None:
         json.dump(rows, f, indent=1)
 
 
+def bridge(path: str) -> None:
+    """Print the parts' offset above the real surface under the lip (module docstring)."""
+    import mujoco
+
+    from suctionbench.sim.cup import SURFACE_GROUP
+
+    with open(path) as f:
+        trials = json.load(f)["per_trial"]
+    group = np.zeros(6, np.uint8)
+    group[SURFACE_GROUP] = 1
+    theta = wrench.lip_angles(48)
+    for t in trials:
+        if not t["valid"] or t["failure"] in NOT_EXECUTED or t["failure"] == "no_seal" or t["label_seal"]:
+            continue
+        runner, mesh, _, grasp, _ = _label_trial(t["object"], int(t["seed"]))
+        model, data = runner.episode.model, runner.episode.data
+        mujoco.mj_forward(model, data)
+        a = np.asarray(grasp.approach, float) / np.linalg.norm(grasp.approach)
+        x = np.cross(a, [1.0, 0.0, 0.0] if abs(a[0]) < 0.9 else [0.0, 1.0, 0.0])
+        x /= np.linalg.norm(x)
+        ring = np.cos(theta)[:, None] * x + np.sin(theta)[:, None] * np.cross(a, x)
+        origins = grasp.point - 0.03 * a + CUP.radius * ring
+        real = np.full(len(theta), np.nan)
+        hits, index, _ = mesh.ray.intersects_location(origins, np.tile(a, (len(theta), 1)), multiple_hits=False)
+        real[index] = (hits - origins[index]) @ a
+        parts, geom = np.full(len(theta), np.nan), np.zeros(1, np.int32)
+        for k, origin in enumerate(origins):
+            distance = mujoco.mj_ray(model, data, origin, a, group, 0, -1, geom)
+            if geom[0] >= 0 and model.geom_bodyid[geom[0]] == runner.episode.object:
+                parts[k] = distance
+        offset = 1e3 * (real - parts)
+        print(f"{t['object']:30s} {t['seed']:4d} simulated {str(t['failure'] or 'success'):20s} labeller "
+              f"{t['label_seal_failure']:18s} parts above the surface: max {np.nanmax(offset):+.2f} min "
+              f"{np.nanmin(offset):+.2f} mm, no surface at {int((np.isnan(real) & ~np.isnan(parts)).sum())} places")
+
+
 if __name__ == "__main__":
     if len(sys.argv) >= 3 and sys.argv[1] == "swing":
         for arg in sys.argv[2:]:
             name, seed_text = arg.rsplit(":", 1)
             swing(name, int(seed_text))
+    elif len(sys.argv) in (2, 3) and sys.argv[1] == "bridge":
+        bridge(sys.argv[2] if len(sys.argv) == 3 else "eval/agreement/agreement_before_surface.json")
     elif len(sys.argv) >= 3 and sys.argv[1] == "relabel":
         relabel(sys.argv[2], "--no-sqrt3" in sys.argv[3:])
     else:

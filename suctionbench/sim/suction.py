@@ -288,7 +288,8 @@ class SuctionController:
         # In the bellows' frame a lip place is (r cos phi, r sin phi, h + fold(phi)), the lip's edge
         # between its points following their folds (linear interpolation round the circle), and
         # the apex is (0, 0, h - H): the ray to a place is (r cos phi, r sin phi, H + fold).
-        depth = sim.ray_apex_height + (self.lip_folds(data) if folds is None else folds)
+        folds = self.lip_folds(data) if folds is None else folds
+        depth = sim.ray_apex_height + folds
         length = np.sqrt(cup.radius**2 + depth * depth)
         local = np.column_stack([self._ring, depth]) / length[:, None]
         rays = (local @ rot.T).ravel()
@@ -310,7 +311,7 @@ class SuctionController:
         offsets = np.where(both, (self._true_dist - self._ray_dist) * local[:, 2], 0.0)
         # The plane is held by the springs that press (folded places); where fewer than three do,
         # by every place that meets both surfaces.
-        carry = both & (depth < sim.ray_apex_height)
+        carry = both & (folds < 0.0)
         carry = carry if carry.sum() >= 3 else both
         if carry.sum() >= 3:
             offsets -= self._plane @ np.linalg.lstsq(self._plane[carry], offsets[carry], rcond=None)[0]

@@ -171,13 +171,14 @@ def test_groove_that_the_convex_parts_span_still_leaks():
     # MuJoCo collides with an object's convex parts, which span its concavities; the lip rests on
     # them, but the air leaks through the real surface. Here the parts are one solid box over the
     # 2 x 4 mm groove of the test above: the lip rests flat on it. Under the lip the real surface
-    # lies 4 mm further at the two crossings (~2 of the 48 places each); their mean (~0.3 mm) moves
-    # the bellows' plane, the rest (~3.7 mm) the lip follows only as far as it is folded, at most its
-    # 2 mm travel, and unfolded it closes no seal gap: at each crossing a channel >= 1.7 mm deep and
-    # 2 mm wide stays open, >= 2 x 2 x 1.7 = 6.8 mm^2 (measured ~6: the 48 places see a 2 mm
-    # crossing as 1-3 places), several times the ~1 mm^2 switch point. No seal, nothing lifted. The same box whose surface is the box itself seals
-    # at full vacuum and lifts, as in test_flat_face_seals_at_full_vacuum_and_lifts: the second
-    # measurement adds nothing where parts and surface agree.
+    # lies 4 mm further at the two crossings and level with the parts elsewhere, where the pressing
+    # springs hold the bellows' plane (it does not move). At a crossing the lip follows the real
+    # surface only as far as it is folded, at most its 2 mm travel, and unfolded it closes no seal
+    # gap: a channel >= 2 mm deep stays open. The 48 places, 0.98 mm apart, see each 2 mm crossing
+    # at 1-3 places: >= 2 x 0.98 mm x 2 mm = 3.9 mm^2 of leak, ~4x the ~1 mm^2 switch point
+    # (measured 5.9 mm^2). No seal, nothing lifted. The same box whose surface is the box itself
+    # seals at full vacuum and lifts, as in test_flat_face_seals_at_full_vacuum_and_lifts: the
+    # second measurement adds nothing where parts and surface agree.
     result = CupRig(hull_spanning(groove=True)).grasp([0.0, 0.0, 0.02])
     assert not result.sealed and not result.held and not result.lifted, result
     assert result.leak_area > CUP.leak_threshold_area

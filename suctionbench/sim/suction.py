@@ -90,7 +90,7 @@ class SuctionController:
         self._fold_weights = _periodic_interpolation(self._phi, n) if n else np.zeros((k, 0))
         """(k, n): the lip's fold at each leak-test place, linear between its points round the circle."""
         self._plane = np.column_stack([np.ones(k), np.cos(self._phi), np.sin(self._phi)])
-        """(k, 3): the lip plane's mean and tilt at the leak test's places (`surface_offsets`)."""
+        """(k, 3): the lip plane's mean and tilt at the leak test's places (`measure_lip`)."""
         self._visual_group = np.zeros(6, dtype=np.uint8)
         self._visual_group[VISUAL_GROUP] = 1
         self._true_geom = np.zeros(k, dtype=np.int32)
@@ -249,11 +249,6 @@ class SuctionController:
         """Gap (m) between the lip's edge and `body`'s convex parts (where the lip rests) at the leak
         test's places round the lip circle: `measure_lip`'s first result."""
         return self.measure_lip(data, body, folds, surface=False)[0]
-
-    def surface_offsets(self, data: mujoco.MjData, body: int, folds: np.ndarray | None = None) -> np.ndarray:
-        """How much further `body`'s real surface lies than its convex parts: `measure_lip`'s second
-        result."""
-        return self.measure_lip(data, body, folds)[1]
 
     def measure_lip(
         self, data: mujoco.MjData, body: int, folds: np.ndarray | None = None, *, surface: bool = True

@@ -18,6 +18,11 @@ Usage:
       above its real surface under the lip: rays along the approach through 48 places of the lip
       circle round the grasp point, `mj_ray` on the parts and trimesh on the posed mesh; the
       largest and smallest offset (mm) and the places where a part is met and no surface is.
+  python eval/agreement/lift_probe.py centred SET [COUNT]
+      the COUNT (default 10) heaviest objects of SET with the robust label (the pick's loads at the
+      rated acceleration, as a dataset labels it) of their centred grasp: straight down at the
+      sealable point nearest above the centre of mass (tests/test_sim.py's `centred_grasp`, which
+      the heaviest-object test uses), and that point's distance from it.
 """
 
 from __future__ import annotations
@@ -172,11 +177,32 @@ def bridge(path: str) -> None:
               f"{np.nanmin(offset):+.2f} mm, no surface at {int((np.isnan(real) & ~np.isnan(parts)).sum())} places")
 
 
+def centred(name: str, count: int) -> None:
+    """Print the heaviest objects' centred-grasp labels (module docstring)."""
+    sys.path.insert(0, "tests")
+    from test_sim import centred_grasp  # the heaviest-object test's grasp
+
+    from suctionbench.objects.registry import list_objects
+
+    for record in sorted(list_objects(name), key=lambda r: -r.mass)[:count]:
+        grasp, rwr = centred_grasp(record)
+        if grasp is None:
+            print(f"{record.key:30s} {record.mass:.3f} kg: no sealable point")
+            continue
+        pose = record.most_probable_pose()
+        com = pose[:3, :3] @ np.asarray(record.com) + pose[:3, 3]
+        point = pose[:3, :3] @ np.asarray(grasp[:3]) + pose[:3, 3]
+        print(f"{record.key:30s} {record.mass:.3f} kg: centred grasp {1e3 * np.hypot(*(point[:2] - com[:2])):.1f} mm "
+              f"from the centre of mass, rwr {rwr:.2f}")
+
+
 if __name__ == "__main__":
     if len(sys.argv) >= 3 and sys.argv[1] == "swing":
         for arg in sys.argv[2:]:
             name, seed_text = arg.rsplit(":", 1)
             swing(name, int(seed_text))
+    elif len(sys.argv) in (3, 4) and sys.argv[1] == "centred":
+        centred(sys.argv[2], int(sys.argv[3]) if len(sys.argv) == 4 else 10)
     elif len(sys.argv) in (2, 3) and sys.argv[1] == "bridge":
         bridge(sys.argv[2] if len(sys.argv) == 3 else "eval/agreement/agreement_before_surface.json")
     elif len(sys.argv) >= 3 and sys.argv[1] == "relabel":

@@ -81,7 +81,7 @@ def hull_spanning(groove: bool, width=0.002, depth=0.004, mass=0.2):
     def build(spec):
         import trimesh
 
-        from suctionbench.objects.mjcf import VISUAL_GROUP
+        from suctionbench.objects.mjcf import add_surface_mesh
 
         length, wide, height = 0.06, 0.04, 0.02
         body = _free_body(spec, height / 2 + 5e-4, mass, box_inertia((length, wide, height), mass))
@@ -94,11 +94,7 @@ def hull_spanning(groove: bool, width=0.002, depth=0.004, mass=0.2):
             surface = trimesh.util.concatenate(pieces)
         else:
             surface = trimesh.creation.box([length, wide, height])
-        mesh = spec.add_mesh(name="obj_surface")
-        mesh.uservert = np.asarray(surface.vertices, dtype=np.float32).ravel().tolist()
-        mesh.userface = np.asarray(surface.faces, dtype=np.int32).ravel().tolist()
-        body.add_geom(name="obj_visual", type=mujoco.mjtGeom.mjGEOM_MESH, meshname="obj_surface",
-                      contype=0, conaffinity=0, group=VISUAL_GROUP, density=0.0)
+        add_surface_mesh(spec, body, "obj", surface)
         return "obj"
 
     return build

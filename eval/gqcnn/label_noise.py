@@ -12,25 +12,23 @@ posterior Beta(k + 1, J - k + 1) (seeded), at the card's threshold and at 0.5.
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
 import numpy as np
 from scipy.stats import binom
 
+from suctionbench.dataset.storage import read_card
+from suctionbench.learning.data import METRIC_FIELD, SplitData, label_threshold
+
 
 def main(dataset: Path, split: str) -> None:
-    card = json.loads((dataset / "config.json").read_text())
+    card = read_card(dataset)
     samples = int(card["config"]["label"]["perturbation"]["num_samples"])
-    per_shard = int(card["config"]["datapoints_per_shard"])
-    threshold = float(card["config"]["label_threshold"])
-    index = np.load(dataset / "splits" / split / "val_indices.npz")["arr_0"]
-    shards = np.unique(index // per_shard)
-    labels = np.concatenate([np.load(dataset / "tensors" / f"robust_suction_wrench_resistance_{s:05d}.npz")["arr_0"]
-                             for s in shards])
-    first = np.repeat(shards * per_shard, [per_shard] * len(shards)) + np.tile(np.arange(per_shard), len(shards))
-    rwr = labels[np.searchsorted(first, index)]
+    threshold = label_threshold(card)
+    val = SplitData(dataset, split, "val")
+    rwr = np.concatenate([val.reader.shard(shard, fields=[METRIC_FIELD])[METRIC_FIELD][val.rows(shard)]
+                          for shard in val.shards])
     k = np.round(rwr * samples).astype(int)
     rng = np.random.default_rng(0)
     print(f"{dataset.name} {split}: {len(rwr)} validation datapoints, J = {samples}, "

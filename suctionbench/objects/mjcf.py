@@ -58,15 +58,20 @@ def add_object_body(
             friction=friction, condim=6, group=3, density=0.0, solref=list(CONTACT_SOLREF),
             contype=OBJECT_CONTYPE, conaffinity=OBJECT_CONAFFINITY,
         )
-    visual = record.mesh()
-    vmesh = spec.add_mesh(name=f"{name}_visual")
-    vmesh.uservert = np.asarray(visual.vertices, dtype=np.float32).ravel().tolist()
-    vmesh.userface = np.asarray(visual.faces, dtype=np.int32).ravel().tolist()
-    body.add_geom(
-        name=f"{name}_visual", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=vmesh.name,
+    add_surface_mesh(spec, body, name, record.mesh())
+    return body
+
+
+def add_surface_mesh(spec: mujoco.MjSpec, body: mujoco.MjsBody, name: str, mesh) -> mujoco.MjsGeom:
+    """The object's surface mesh (a trimesh) as geom `{name}_visual` of `body`: rendered, no
+    contacts, in VISUAL_GROUP, where the simulated cup's leak test finds the real surface."""
+    surface = spec.add_mesh(name=f"{name}_visual")
+    surface.uservert = np.asarray(mesh.vertices, dtype=np.float32).ravel().tolist()
+    surface.userface = np.asarray(mesh.faces, dtype=np.int32).ravel().tolist()
+    return body.add_geom(
+        name=f"{name}_visual", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=surface.name,
         contype=0, conaffinity=0, group=VISUAL_GROUP, density=0.0, rgba=[0.8, 0.55, 0.3, 1.0],
     )
-    return body
 
 
 def rest_on_plane(record: ObjectRecord, seconds: float = 2.0) -> dict[str, float]:

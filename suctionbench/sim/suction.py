@@ -97,7 +97,7 @@ class SuctionController:
         self._true_dist = np.zeros(k)
         self._true_normal = np.zeros((k, 3))
         self._surface_geom: dict[int, int] = {}
-        """Per object body: its surface-mesh geom (-1: none; its collision geometry is its surface)."""
+        """Per object body: its surface-mesh geom (-1: none, or convex: its collision geometry is its surface)."""
 
     # -- read-outs --------------------------------------------------------------------------------
     def compression(self, data: mujoco.MjData) -> float:
@@ -296,9 +296,11 @@ class SuctionController:
         cos_slope = np.maximum(np.abs(self._ray_normal @ axis), _COS_WALL)
         rest = (sim.lip_sphere_radius + sim.contact_margin) / cos_slope - sim.lip_sphere_radius
         gaps = np.clip(np.where(parts, beyond - rest, cup.radius), 0.0, cup.radius)
-        mesh = self._surface_mesh(body) if surface else -1
-        if not surface or mesh < 0:
-            return gaps, (np.zeros(k) if surface else None)
+        if not surface:
+            return gaps, None
+        mesh = self._surface_mesh(body)
+        if mesh < 0:
+            return gaps, np.zeros(k)
         mujoco.mj_multiRay(self.model, data, apex, rays, self._visual_group, 0, -1, self._true_geom,
                            self._true_dist, self._true_normal.ravel(), k, cutoff)
         real = self._true_geom == mesh
@@ -313,10 +315,12 @@ class SuctionController:
         return gaps, np.where(parts & ~real, np.nan, offsets)
 
     def _surface_mesh(self, body: int) -> int:
-        """`body`'s surface-mesh geom (`objects.mjcf.add_object_body`), -1 if it has none."""
+        """`body`'s surface-mesh geom (`objects.mjcf.add_surface_mesh`) where its convex parts can
+        span a concavity; -1 where they cannot: no surface mesh (a primitive is its own surface) or
+        a convex one (its parts are the surface), whose second ray cast would measure nothing."""
         if body not in self._surface_geom:
-            self._surface_geom[body] = mujoco.mj_name2id(
-                self.model, mujoco.mjtObj.mjOBJ_GEOM, f"{self.model.body(body).name}_visual")
+            geom = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, f"{self.model.body(body).name}_visual")
+            self._surface_geom[body] = geom if geom >= 0 and not _convex_mesh(self.model, geom) else -1
         return self._surface_geom[body]
 
     def _leak_area(self, data: mujoco.MjData, body: int) -> float:
@@ -359,6 +363,17 @@ class SuctionController:
         self.sealed = body if self.commanded else -1
         data.ctrl[self.actuators] = 1.0 if (self.commanded and body >= 0) else 0.0
         return body
+
+
+def _convex_mesh(model: mujoco.MjModel, geom: int) -> bool:
+    """Whether mesh geom `geom`'s triangles bound a convex solid (trimesh's test, with its tolerance)."""
+    import trimesh
+
+    mesh = int(model.geom_dataid[geom])
+    vert, nvert = int(model.mesh_vertadr[mesh]), int(model.mesh_vertnum[mesh])
+    face, nface = int(model.mesh_faceadr[mesh]), int(model.mesh_facenum[mesh])
+    return bool(trimesh.Trimesh(model.mesh_vert[vert:vert + nvert], model.mesh_face[face:face + nface],
+                                process=False).is_convex)
 
 
 def _periodic_interpolation(phi: np.ndarray, n: int) -> np.ndarray:

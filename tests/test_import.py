@@ -548,6 +548,32 @@ def test_a_small_void_between_united_pieces_is_filled_a_large_one_is_named():
         _solid(_walls(0.05, 0.005))
 
 
+def test_a_cavity_modelled_facing_inwards_stays_hollow_in_the_mass(tmp_path):
+    """A 80 x 60 x 100 mm box with a 40 mm cubic cavity written as a second closed surface facing
+    inwards (as CAD writes a sealed hollow), the cavity's centre 15 mm along +x.
+
+    Derivation, uniform density (a given mass is spread uniformly over the material): the material
+    is the box less the cavity, V = 480 - 64 = 416 cm^3, and its centre of mass is the box's (the
+    origin) less the cavity's moment: x = -(64 cm^3 x 15 mm) / 416 cm^3 = -2.3077 mm, y = z = 0.
+    Before, the inward surface was turned outwards and united with the box: the cavity was filled
+    (480 cm^3, centre at the origin). The same cavity written facing outwards is a second solid
+    inside the first (overlap), and stays united as before."""
+    cavity = _box((0.04, 0.04, 0.04), (0.015, 0.0, 0.0))
+    cavity.invert()
+    path = tmp_path / "hollow.stl"
+    trimesh.util.concatenate([_box((0.08, 0.06, 0.1)), cavity]).export(path)
+    record = import_mesh(path, set_name="custom", name="hollow", mass=0.2, root=tmp_path / "objs")
+    assert record.volume == pytest.approx(416e-6, rel=1e-6)  # float32 STL vertices
+    assert record.com == pytest.approx([-0.96e-6 / 416e-6, 0.0, 0.0], abs=1e-7)
+    assert record.density == pytest.approx(0.2 / 416e-6, rel=1e-6)
+    assert any("1 sealed cavity modelled inside (13.3% of the volume" in n for n in record.params["repairs"])
+    mesh = record.mesh()  # the object's surface is the outer one: what the cup and the camera meet
+    assert mesh.volume == pytest.approx(480e-6, rel=1e-6) and len(mesh.split(only_watertight=False)) == 1
+    cavity.invert()
+    solid = _solid(trimesh.util.concatenate([_box((0.08, 0.06, 0.1)), cavity]))
+    assert solid.cavities is None and solid.mesh.volume == pytest.approx(480e-6, rel=1e-6)
+
+
 def test_pieces_touching_along_an_edge_stay_closed_when_vertices_are_merged():
     """Two boxes that share only an edge: united, the edge's vertices appear twice (one per box); every
     later reader merges vertices by position, which made the edge non-manifold (4 faces)."""

@@ -249,6 +249,7 @@ def build_object(
     coacd: tuple[tuple[tuple[float, int], ...], dict] | None = None,
     coacd_parallel: int = 1,
     reuse_parts: bool = False,
+    cavities: trimesh.Trimesh | None = None,
 ) -> ObjectRecord:
     """Build an object directory at `out_dir` (replaced atomically) and return its record.
 
@@ -262,12 +263,16 @@ def build_object(
     defaults (see `decompose_mesh`); `coacd_parallel`: how many of its tries may run at once.
     `reuse_parts`: where `out_dir` already holds this very mesh (same
     geometry hash) with its convex parts, keep those parts instead of running CoACD again (a rebuild
-    that changes only masses; CoACD is deterministic, so a full rebuild gives the same parts)."""
+    that changes only masses; CoACD is deterministic, so a full rebuild gives the same parts).
+    `cavities`: sealed cavities inside the mesh, facing inwards (`objects.repair.Solid.cavities`): the
+    mass, centre of mass and inertia are the material's (mesh and cavities together), the volume and
+    density the material's; surface, stable poses' hull and convex parts are the mesh's."""
     out_dir = Path(out_dir)
     check_replaceable_objects([out_dir])  # before the work: minutes of CoACD for nothing otherwise
     mesh = prepare_mesh(mesh, source=source if source != "generated" else spec.name)
-    model, props = object_mass(mesh, spec, mass)
-    mesh.density = props.mass / mesh.volume
+    material = mesh if cavities is None else trimesh.util.concatenate([mesh, cavities])
+    model, props = object_mass(material, spec, mass)
+    density = props.mass / float(material.volume)
     record = ObjectRecord(
         name=spec.name,
         set=spec.set,
@@ -277,12 +282,12 @@ def build_object(
         source=source,
         units=units,
         scale=mesh_scale(units, scale),
-        density=round(mesh.density, 6),
+        density=round(density, 6),
         mass=round(props.mass, 9),
         com=(np.round(props.com, 9) + 0.0).tolist(),
         inertia=(np.round(props.inertia, 12) + 0.0).tolist(),
         friction=spec.friction,
-        volume=round(float(mesh.volume), 12),
+        volume=round(float(material.volume), 12),
         watertight=True,
         faces=len(mesh.faces),
         extents=np.round(mesh.extents, 9).tolist(),

@@ -77,4 +77,5 @@ def import_mesh(
         mass=mass,
         coacd=(IMPORT_SCHEDULE, IMPORT_OPTIONS),
         coacd_parallel=coacd_parallel or len(os.sched_getaffinity(0)),
+        cavities=solid.cavities,
     )

@@ -15,6 +15,10 @@ undoes the usual disguises, in this order, and says what it did:
    closed (trimesh's triangle/quad fill, then a fan for any hole no wider than HOLE_FILL_MAX of
    the body). Bodies that stay open enclose no volume: if they are a small share of the surface
    (a label sleeve, a stray sheet, an inner wall) they are dropped, otherwise the mesh is rejected.
+   A closed body written inside out (facing inwards) within another is a sealed *cavity* the author
+   modelled (a closed bottle with its wall, a housing): it is kept apart, not turned outwards and
+   united (which would fill it and overstate the mass by the cavity's share), and the solid is the
+   outer surface with the cavity's material taken out of its mass (`Solid.cavities`).
 5. *Self-intersection.* A closed body whose surface passes through itself counts the overlap
    twice in its volume (and so mass and inertia); the generalised winding number at sample
    points finds it and the mesh is rejected.
@@ -90,6 +94,14 @@ class Solid:
     mesh: trimesh.Trimesh
     notes: list[str] = field(default_factory=list)
     """One line per repair (what was wrong and what was done)."""
+    cavities: trimesh.Trimesh | None = None
+    """Sealed cavities inside `mesh` as the mesh modelled them (closed surfaces facing inwards, so
+    their volume is negative), or None. The object's surface, collision and grasps are `mesh`'s;
+    its mass and inertia are those of `mesh` with the cavities taken out (`hollow`)."""
+
+    def hollow(self) -> trimesh.Trimesh:
+        """The surface that bounds the material: `mesh` with its cavities (for mass properties)."""
+        return self.mesh if self.cavities is None else trimesh.util.concatenate([self.mesh, self.cavities])
 
 
 def merge_by_position(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
@@ -273,7 +285,7 @@ def solidify(mesh: trimesh.Trimesh, source: str, rebuild: bool = True) -> Solid:
     if nonmanifold:
         how = f"{cut} cut where faces dangle or walls sit inside" if cut else "pieces separated where they touch"
         notes.append(f"{nonmanifold} non-manifold edges (3 or more faces on an edge): {how}")
-    closed, open_parts = [], []
+    closed, open_parts, inward = [], [], []
     holes_closed = 0
     scale = float(np.prod(np.maximum(mesh.extents, 1e-12)))  # the object's box: what "no volume" is relative to
     for group in groups:
@@ -294,6 +306,7 @@ def solidify(mesh: trimesh.Trimesh, source: str, rebuild: bool = True) -> Solid:
         if volume < 0:
             body.invert()
         closed.append(body)
+        inward.append(volume < 0)
     if holes_closed:
         notes.append(f"{_count(holes_closed, 'small hole')} closed")
     if open_parts:
@@ -335,6 +348,7 @@ def solidify(mesh: trimesh.Trimesh, source: str, rebuild: bool = True) -> Solid:
             f"{_count(len(open_parts), 'open body', 'open bodies')} dropped ({faces} faces, "
             f"{share:.1%} of the surface: sheets or inner faces that enclose no volume)"
         )
+    closed, cavities = _separate_cavities(closed, inward)
     total = sum(float(body.volume) for body in closed)
     for i, body in enumerate(closed):
         # what counts is the volume counted twice as a share of the object's: a sliver body of a
@@ -346,9 +360,34 @@ def solidify(mesh: trimesh.Trimesh, source: str, rebuild: bool = True) -> Solid:
                 f"{tag}: self-intersecting surface{which}: it encloses about {doubled:.0%} of the object's volume "
                 "twice (or inside out), so volume, mass and inertia would be wrong"
             )
-    if len(closed) == 1:
-        return Solid(unpinch(closed[0]), notes)
-    return _unite(closed, notes, tag)
+    solid = Solid(unpinch(closed[0]), notes) if len(closed) == 1 else _unite(closed, notes, tag)
+    if cavities:
+        hollow = -sum(_volume(c) for c in cavities)
+        solid.cavities = trimesh.util.concatenate(cavities) if len(cavities) > 1 else cavities[0]
+        solid.notes.append(
+            f"{_count(len(cavities), 'sealed cavity', 'sealed cavities')} modelled inside "
+            f"({hollow / _volume(solid.mesh):.1%} of the volume within the outer surface): kept hollow, "
+            "its material left out of the mass")
+    return solid
+
+
+def _separate_cavities(closed: list[trimesh.Trimesh], inward: list[bool]) -> tuple[list[trimesh.Trimesh], list]:
+    """(solid bodies, cavities): a body the mesh wrote facing inwards that lies inside a body facing
+    outwards (all of 32-64 of its vertices spread over it inside) is a cavity of it, returned facing
+    inwards again (negative volume); every other body is solid (one facing inwards on its own is a
+    solid written inside out; one that crosses the outer surface is no cavity)."""
+    outward = [b for b, flipped in zip(closed, inward, strict=True) if not flipped]
+    bodies, cavities = [], []
+    for body, flipped in zip(closed, inward, strict=True):
+        points = np.asarray(body.vertices[:: max(1, len(body.vertices) // 32)])
+        if flipped and any(_volume(o) > _volume(body) and bool((winding_numbers(o, points) > 0.5).all())
+                           for o in outward):
+            cavity = body.copy()
+            cavity.invert()
+            cavities.append(cavity)
+        else:
+            bodies.append(body)
+    return bodies, cavities
 
 
 def _volume(mesh: trimesh.Trimesh) -> float:
@@ -460,7 +499,8 @@ def _fill_voids(piece: trimesh.Trimesh, notes: list[str], tag: str) -> trimesh.T
     if share > LOOSE_MAX:
         raise InputError(
             f"{tag}: hollow: {_count(len(parts) - 1, 'sealed inner cavity', 'sealed inner cavities')} of "
-            f"{share:.1%} of its volume; an object must be one solid body (fill the cavity)"
+            f"{share:.1%} of its volume between overlapping pieces (hollow, or gaps between the pieces of a "
+            "solid: fill it, or write it as a closed surface facing inwards to keep it hollow)"
         )
     notes.append(f"{_count(len(parts) - 1, 'sealed void')} between united pieces filled ({share:.2%} of the volume)")
     return outer

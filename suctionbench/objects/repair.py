@@ -328,7 +328,7 @@ def solidify(mesh: trimesh.Trimesh, source: str, rebuild: bool = True) -> Solid:
                     note = (f"{what} (patches that do not meet): rebuilt as the solid the surface bounds "
                             f"(generalised winding number, {WINDING_GRID} cells across; {ambiguous:.1%} of the "
                             f"volume ambiguous)")
-                    return Solid(solid.mesh, [note, *solid.notes])
+                    return Solid(solid.mesh, [note, *solid.notes], solid.cavities)
         if not closed:
             body, holes, widest = max(open_parts, key=lambda p: p[0].area)
             if cut and not holes:

@@ -566,7 +566,7 @@ def test_a_cavity_modelled_facing_inwards_stays_hollow_in_the_mass(tmp_path):
     assert record.volume == pytest.approx(416e-6, rel=1e-6)  # float32 STL vertices
     assert record.com == pytest.approx([-0.96e-6 / 416e-6, 0.0, 0.0], abs=1e-7)
     assert record.density == pytest.approx(0.2 / 416e-6, rel=1e-6)
-    assert any("1 sealed cavity modelled inside (13.3% of the volume" in n for n in record.params["repairs"])
+    assert any("1 sealed cavity modelled inside (13.33% of the volume" in n for n in record.params["repairs"])
     mesh = record.mesh()  # the object's surface is the outer one: what the cup and the camera meet
     assert mesh.volume == pytest.approx(480e-6, rel=1e-6) and len(mesh.split(only_watertight=False)) == 1
     cavity.invert()

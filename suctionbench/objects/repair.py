@@ -366,8 +366,8 @@ def solidify(mesh: trimesh.Trimesh, source: str, rebuild: bool = True) -> Solid:
         solid.cavities = trimesh.util.concatenate(cavities) if len(cavities) > 1 else cavities[0]
         solid.notes.append(
             f"{_count(len(cavities), 'sealed cavity', 'sealed cavities')} modelled inside "
-            f"({hollow / _volume(solid.mesh):.1%} of the volume within the outer surface): kept hollow, "
-            "its material left out of the mass")
+            f"({hollow / _volume(solid.mesh):.2%} of the volume within the outer surface): kept hollow, "
+            "no material there in the mass")
     return solid
 
 

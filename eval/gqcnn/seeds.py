@@ -45,6 +45,14 @@ def run_ap(run: Path) -> float | None:
 
 def main(runs: Path, base: str | None) -> None:
     found = collect(runs)
+    read: dict[Path, dict[int, tuple[str, bool]]] = {}
+
+    def outcomes_of(run: Path) -> dict[int, tuple[str, bool]]:
+        """`paired.outcomes`, each run's logs read once (the base's are compared with every policy)."""
+        if run not in read:
+            read[run] = outcomes(run)
+        return read[run]
+
     names = list(dict.fromkeys(name for name, _ in found))
     base = base or names[0]
     print(f"| policy | set | seeds | successes per seed | success % (pooled, +- se) | mean AP % | "
@@ -53,12 +61,12 @@ def main(runs: Path, base: str | None) -> None:
     for (name, task), seeds in sorted(found.items(), key=lambda kv: (kv[0][1], names.index(kv[0][0]))):
         per_seed, wins, trials, only_base, only_run = [], 0, 0, 0, 0
         for seed, run in sorted(seeds.items()):
-            result = outcomes(run)
+            result = outcomes_of(run)
             per_seed.append(sum(ok for _, ok in result.values()))
             wins, trials = wins + per_seed[-1], trials + len(result)
             other = found.get((base, task), {}).get(seed)
             if other is not None and name != base:
-                ref = outcomes(other)
+                ref = outcomes_of(other)
                 shared = set(ref) & set(result)
                 only_base += sum(ref[i][1] and not result[i][1] for i in shared)
                 only_run += sum(result[i][1] and not ref[i][1] for i in shared)

@@ -97,11 +97,7 @@ class Solid:
     cavities: trimesh.Trimesh | None = None
     """Sealed cavities inside `mesh` as the mesh modelled them (closed surfaces facing inwards, so
     their volume is negative), or None. The object's surface, collision and grasps are `mesh`'s;
-    its mass and inertia are those of `mesh` with the cavities taken out (`hollow`)."""
-
-    def hollow(self) -> trimesh.Trimesh:
-        """The surface that bounds the material: `mesh` with its cavities (for mass properties)."""
-        return self.mesh if self.cavities is None else trimesh.util.concatenate([self.mesh, self.cavities])
+    its mass and inertia are those of `mesh` with the cavities taken out (`objects.build.build_object`)."""
 
 
 def merge_by_position(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
@@ -373,7 +369,7 @@ def solidify(mesh: trimesh.Trimesh, source: str, rebuild: bool = True) -> Solid:
 
 def _separate_cavities(closed: list[trimesh.Trimesh], inward: list[bool]) -> tuple[list[trimesh.Trimesh], list]:
     """(solid bodies, cavities): a body the mesh wrote facing inwards that lies inside a body facing
-    outwards (all of 32-64 of its vertices spread over it inside) is a cavity of it, returned facing
+    outwards (every vertex of a sample of up to 64 spread over it inside) is a cavity, returned facing
     inwards again (negative volume); every other body is solid (one facing inwards on its own is a
     solid written inside out; one that crosses the outer surface is no cavity)."""
     outward = [b for b, flipped in zip(closed, inward, strict=True) if not flipped]

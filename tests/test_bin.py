@@ -19,6 +19,7 @@ from suctionbench.clutter.planning import path_is_clear
 from suctionbench.clutter.tasks import BinTask, load_bin_task
 from suctionbench.errors import InputError
 from suctionbench.evaluation.tasks import is_bin_task
+from suctionbench.policies.gqcnn import DEFAULT_MODEL
 from suctionbench.sensing.camera import CameraIntrinsics
 from suctionbench.sensing.segmentation import segment_regions
 
@@ -188,6 +189,8 @@ def test_bin_smoke_eval_from_the_cli(tmp_path, policy):
     summary = json.loads(result.stdout.strip().splitlines()[-1])
     run = json.loads((out / "run.json").read_text())
     assert (out / "bins" / "bin_0000.mcap").stat().st_size > 0
+    # the run names the model a GQ-CNN policy planned with (the shipped default: none was given)
+    assert run["model_used"] == ("assets/" + "/".join(DEFAULT_MODEL) if "gqcnn" in policy else None)
     (record,) = run["bins"]
     attempts = record["attempts"]
     assert attempts and summary["metrics"]["attempts"] == len(attempts)

@@ -9,8 +9,10 @@ import pytest
 from typer.testing import CliRunner
 
 from suctionbench.cli import app
+from suctionbench.evaluation.report import build_report
 from suctionbench.evaluation.runner import plan_trials
 from suctionbench.evaluation.tasks import load_task
+from suctionbench.policies.gqcnn import DEFAULT_MODEL
 from suctionbench.runlog.reader import read_run
 from suctionbench.sim.episode import FAILURES
 
@@ -39,6 +41,12 @@ def test_smoke_eval_end_to_end_from_the_logs(tmp_path):
     results = [log["result"] for log in logs]
     assert summary["success_rate"] == pytest.approx(sum(r["success"] for r in results) / len(results), abs=1e-4)
     assert summary["outcomes"] == dict(Counter(r["failure"] or "success" for r in results))
+    # the run names the model it planned with, though none was given: the default changes between
+    # releases, and a report of the run says which one it was
+    run = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert run["model"] is None and run["model_used"] == "assets/" + "/".join(DEFAULT_MODEL)
+    build_report([tmp_path / "run"], tmp_path / "report")
+    assert f"model {run['model_used']};" in (tmp_path / "report" / "report.md").read_text()
 
 
 def test_trials_are_identical_across_policies():

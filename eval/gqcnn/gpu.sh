@@ -74,7 +74,7 @@ cp "$WORK/models/$first/model.safetensors" "$OUT/$first.safetensors"
 cp "$WORK/models/$first/precision_recall.png" "$OUT/${first}_pr.png" 2>/dev/null
 
 log "4. held-out scores"
-models=(assets/models/gqcnn-context-pose)
+models=(assets/models/gqcnn-context-pose-avg)  # the shipped default, as the reference
 for arch in $ARCHS; do models+=("$WORK/models/$arch"); done
 timeout 40 $PY eval/bin/heldout.py "$WORK/data" "${models[@]}" | tee "$OUT/heldout.jsonl"
 log "done"

@@ -101,8 +101,8 @@ def bin_sections(run_dirs: list[Path], out: Path) -> dict[str, Any]:
         if item:
             gallery.append(item)
     footer = [{"run": f"{_label(run)} / {run['task']}", "trials": run["trials"], "seed": run.get("seed"),
-               "camera": run.get("camera"), "cup": run.get("cup"), "command": run.get("command") or "-",
-               "versions": run.get("versions") or {}} for run, _ in runs]
+               "camera": run.get("camera"), "cup": run.get("cup"), "model": run.get("model_used"),
+               "command": run.get("command") or "-", "versions": run.get("versions") or {}} for run, _ in runs]
     return {"tables": tables, "figures": figures, "gallery": gallery, "footer": footer}
 
 

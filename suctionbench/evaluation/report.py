@@ -273,7 +273,7 @@ def _run_info(run_dir: Path, summary: dict[str, Any]) -> dict[str, Any]:
 
     run = read_run_json(Path(run_dir))
     return {"run": f"{summary['label']} / {summary['set']}", "trials": summary["trials"], "seed": run.get("seed"),
-            "camera": run.get("camera", "primesense"), "cup": run.get("cup"),
+            "camera": run.get("camera", "primesense"), "cup": run.get("cup"), "model": run.get("model_used"),
             "command": run.get("command") or "-", "versions": run.get("versions") or {}}
 
 
@@ -459,8 +459,9 @@ def _write_markdown(out: Path, tables: list[Table], figures, objects, galleries,
             lines += [f"![{caption}]({name}) {caption}  " for name, caption in items]
     lines += ["", "## Runs and versions", ""]
     for run in footer["runs"]:
+        model = f", model {run['model']}" if run.get("model") else ""
         lines.append(f"- **{run['run']}**: {run['trials']} trials, seed {run['seed']}, camera {run['camera']}, "
-                     f"cup {run['cup']}; `{run['command']}`")
+                     f"cup {run['cup']}{model}; `{run['command']}`")
     lines += ["", f"Report: `{footer['report_command']}`", "",
               "Versions: " + ", ".join(f"{k} {v}" for k, v in footer["versions"].items())]
     with atomic_path(out / "report.md") as tmp:
@@ -495,7 +496,8 @@ def _write_html(out: Path, tables: list[Table], figures, objects, galleries, foo
     )
     runs = "".join(
         f"<li><b>{esc(r['run'])}</b>: {r['trials']} trials, seed {esc(str(r['seed']))}, camera "
-        f"{esc(str(r['camera']))}, cup {esc(str(r['cup']))}; <code>{esc(r['command'])}</code></li>"
+        f"{esc(str(r['camera']))}, cup {esc(str(r['cup']))}"
+        f"{', model ' + esc(str(r['model'])) if r.get('model') else ''}; <code>{esc(r['command'])}</code></li>"
         for r in footer["runs"]
     )
     versions = ", ".join(f"{esc(k)} {esc(v)}" for k, v in footer["versions"].items())

@@ -101,6 +101,7 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
     before the first trial, and the summary's "resumed" is false. "resumed" is true where an
     interrupted run was finished, "trials_reused" counts its trial logs that were kept."""
     from suctionbench.policies.base import MODEL_POLICIES
+    from suctionbench.policies.gqcnn import model_used
     from suctionbench.policies.plugins import builtin_name, canonical_spec, load_policy, policy_label
     from suctionbench.sensing.camera import resolve_camera
 
@@ -145,6 +146,7 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
                              "choose another --out)")
         check_removable_run(out)
     run = {"task": asdict(task), "policy": label, "policy_spec": spec, "policy_args": policy_args, "model": model,
+           "model_used": model_used(builtin_name(spec), policy_args.get("model", model)),
            "metric": metric, "cup": cup, "camera": intrinsics.name, "trials": len(planned),
            "seed": seed if seed is not None else task.seed, "compute_model": CYCLE_MODEL.compute_time(spec),
            "command": command, "versions": _versions()}

@@ -70,12 +70,24 @@ from suctionbench.sensing.thumbnails import (
     project_grasps,
 )
 
-DEFAULT_MODEL = ("models", "gqcnn-context-pose")
+DEFAULT_MODEL = ("models", "gqcnn-context-pose-avg")
 """Path parts, under assets/, of the model `make_policy("gqcnn")` loads when given none."""
 
 ADV_MODEL = ("models", "gqcnn-adv")
 """Path parts, under assets/, of the model trained only on the adversarial set's objects: the
 paper's "GQ-CNN (ADV)" row, `make_policy("gqcnn-adv")`."""
+
+SHIPPED_MODELS = {"gqcnn": DEFAULT_MODEL, "fc-gqcnn": DEFAULT_MODEL, "gqcnn-adv": ADV_MODEL}
+"""The shipped model each built-in GQ-CNN policy loads when given none."""
+
+
+def model_used(policy: str | None, model: str | Path | None) -> str | None:
+    """The model built-in `policy` plans with, as run logs record it: the directory it was given,
+    else its shipped model as `assets/models/NAME`; None for a policy that reads no model. The
+    default changes between releases, so a run must name the one it used."""
+    if policy not in SHIPPED_MODELS:
+        return None
+    return str(model) if model else "assets/" + "/".join(SHIPPED_MODELS[policy])
 
 
 @runtime_checkable

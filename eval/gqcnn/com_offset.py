@@ -14,14 +14,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import tomllib
 from pathlib import Path
 
 import numpy as np
-import trimesh
 from scipy.spatial.transform import Rotation
 
-from suctionbench.resources import asset_path
+from suctionbench.objects.registry import load_object
 from suctionbench.runlog.reader import iter_messages, read_run
 
 
@@ -45,9 +43,8 @@ def trial_offsets(run_dir: Path, objects: list[str] | None) -> list[dict]:
         if objects and not any(o in name for o in objects):
             continue
         if name not in shapes:
-            folder = asset_path("objects", *name.split("/"))
-            record = tomllib.loads((folder / "object.toml").read_text())
-            shapes[name] = (np.array(record["com"]), trimesh.load(folder / "mesh.stl").center_mass)
+            record = load_object(name)
+            shapes[name] = (np.array(record.com), record.mesh().center_mass)
         com, centre = shapes[name]
         rotation, translation = object_pose(log["path"])
         grasp = np.array(result["grasp_world"][:3])

@@ -16,6 +16,7 @@ import math
 import re
 import sys
 from collections import defaultdict
+from functools import cache
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -45,14 +46,7 @@ def run_ap(run: Path) -> float | None:
 
 def main(runs: Path, base: str | None) -> None:
     found = collect(runs)
-    read: dict[Path, dict[int, tuple[str, bool]]] = {}
-
-    def outcomes_of(run: Path) -> dict[int, tuple[str, bool]]:
-        """`paired.outcomes`, each run's logs read once (the base's are compared with every policy)."""
-        if run not in read:
-            read[run] = outcomes(run)
-        return read[run]
-
+    outcomes_of = cache(outcomes)  # each run's logs read once (the base's are compared with every policy)
     names = list(dict.fromkeys(name for name, _ in found))
     base = base or names[0]
     print(f"| policy | set | seeds | successes per seed | success % (pooled, +- se) | mean AP % | "

@@ -77,7 +77,6 @@ def run_bin_eval(task: BinTask, policy: str, out: Path, *, model: str | None = N
     from suctionbench.io import atomic_dir, json_safe
     from suctionbench.parallel import map_ordered
     from suctionbench.policies.gqcnn import model_used
-    from suctionbench.policies.plugins import builtin_name
     from suctionbench.sensing.camera import resolve_camera
 
     if masks not in MASK_SOURCES:
@@ -102,8 +101,8 @@ def run_bin_eval(task: BinTask, policy: str, out: Path, *, model: str | None = N
                 progress(1)
         run = {
             "kind": RUN_KIND, "task": task.name, "policy": policy, "policy_args": policy_args or {},
-            "model": model, "model_used": model_used(builtin_name(policy), (policy_args or {}).get("model", model)),
-            "masks": masks, "cup": cup, "camera": camera, "seed": task.seed, "trials": count,
+            "model": model, "model_used": model_used(policy, model, policy_args), "masks": masks, "cup": cup,
+            "camera": camera, "seed": task.seed, "trials": count,
             "compute_model": compute, "command": _invocation(), "versions": _versions(),
             "metrics": bin_metrics(bins, compute), "bins": bins,
         }

@@ -146,7 +146,7 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
                              "choose another --out)")
         check_removable_run(out)
     run = {"task": asdict(task), "policy": label, "policy_spec": spec, "policy_args": policy_args, "model": model,
-           "model_used": model_used(builtin_name(spec), policy_args.get("model", model)),
+           "model_used": model_used(spec, model, policy_args),
            "metric": metric, "cup": cup, "camera": intrinsics.name, "trials": len(planned),
            "seed": seed if seed is not None else task.seed, "compute_model": CYCLE_MODEL.compute_time(spec),
            "command": command, "versions": _versions()}

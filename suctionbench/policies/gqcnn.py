@@ -58,6 +58,7 @@ import numpy as np
 
 from suctionbench.errors import InputError
 from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, SceneCloud, scene_cloud
+from suctionbench.policies.plugins import builtin_name
 from suctionbench.resources import asset_path
 from suctionbench.sensing.object_context import ObjectShape, object_context
 from suctionbench.sensing.thumbnails import (
@@ -81,13 +82,16 @@ SHIPPED_MODELS = {"gqcnn": DEFAULT_MODEL, "fc-gqcnn": DEFAULT_MODEL, "gqcnn-adv"
 """The shipped model each built-in GQ-CNN policy loads when given none."""
 
 
-def model_used(policy: str | None, model: str | Path | None) -> str | None:
-    """The model built-in `policy` plans with, as run logs record it: the directory it was given,
-    else its shipped model as `assets/models/NAME`; None for a policy that reads no model. The
-    default changes between releases, so a run must name the one it used."""
-    if policy not in SHIPPED_MODELS:
+def model_used(policy: str, model: str | Path | None = None, policy_args: dict | None = None) -> str | None:
+    """The model the policy spec `policy` plans with, as run logs record it: the directory it was
+    given (a ``model`` policy option before `model`), else a built-in policy's shipped model as
+    `assets/models/NAME`; None for a policy that reads no model. The default changes between
+    releases, so a run must name the one it used."""
+    name = builtin_name(policy)
+    if name not in SHIPPED_MODELS:
         return None
-    return str(model) if model else "assets/" + "/".join(SHIPPED_MODELS[policy])
+    model = (policy_args or {}).get("model", model)
+    return str(model) if model else "assets/" + "/".join(SHIPPED_MODELS[name])
 
 
 @runtime_checkable

@@ -6,5 +6,5 @@ Data flow, one module each: `tasks` (tasks/bin-*.toml: which objects fill each b
 `planning` (image policies per object region; the known-state policy with path checks) ->
 `runner` (one bin end to end, labels beside outcomes) -> `benchmark` (`eval --task bin-*`: every
 bin, MCAP logs, run.json) -> `report` (the report's bin sections). The gymnasium environment is
-`suctionbench.envs.suction_bin` (SuctionBin-v2).
+`suctionbench.envs.suction_bin` (SuctionBin-v3).
 """

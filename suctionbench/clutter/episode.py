@@ -149,6 +149,7 @@ class BinEpisode(PickEpisode):
         the pile settle after each drop."""
         if stable_pose is not None:
             raise ValueError("a bin is filled by drops; stable poses are for single-object scenes")
+        self.liquids.restore()
         mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[:] = self.scene.home_qpos
         self.data.ctrl[:] = self.scene.home_ctrl
@@ -360,15 +361,15 @@ class BinEpisode(PickEpisode):
         mujoco.mj_forward(self.model, self.data)
         self._retract()
 
-    def posed_mesh(self, body: int, mesh: Any, com: np.ndarray) -> tuple[Any, np.ndarray]:
-        """An object's surface mesh and centre of mass (given in its own frame) moved to its current
-        world pose."""
+    def posed_mesh(self, body: int, mesh: Any) -> tuple[Any, np.ndarray]:
+        """An object's surface mesh (given in its own frame) and centre of mass (the body's, so with
+        its liquid as levelled: `sim.liquids`) at its current world pose."""
         d = self.data
         pose = np.eye(4)
         pose[:3, :3], pose[:3, 3] = d.xmat[body].reshape(3, 3), d.xpos[body]
         mesh = mesh.copy()
         mesh.apply_transform(pose)
-        return mesh, pose[:3, :3] @ np.asarray(com) + pose[:3, 3]
+        return mesh, pose[:3, :3] @ self.model.body_ipos[body] + pose[:3, 3]
 
     def resting_load(self, body: int) -> tuple[float, np.ndarray | None]:
         """The downward force (N) the other objects in the bin press onto `body` with, summed over

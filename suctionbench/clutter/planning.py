@@ -127,7 +127,7 @@ def analytic_in_bin(episode: Any, objects: dict[int, tuple[Any, Any]], cup: Any,
     best, best_body = None, -1
     for body in episode.present:
         record, own_mesh = objects[body]
-        mesh, com = episode.posed_mesh(body, own_mesh, record.com)
+        mesh, com = episode.posed_mesh(body, own_mesh)
         mass, com = episode.loaded(body, record.mass, com)  # with what rests on it
         try:
             ranked = analytic_grasp(mesh, com, mass, cup, seed, metric=metric, candidates=candidates)

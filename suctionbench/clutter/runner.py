@@ -145,7 +145,7 @@ class BinRunner:
             rng = np.random.default_rng(seed)
             body = self.episode.present[int(rng.integers(len(self.episode.present)))]
             record, mesh = self.objects[body]
-            chosen = random_surface_grasp(self.episode.posed_mesh(body, mesh, record.com)[0], seed)
+            chosen = random_surface_grasp(self.episode.posed_mesh(body, mesh)[0], seed)
             return chosen.point, chosen.approach, None, {}
         policy = cached_policy(req.policy, req.model, req.policy_args)
         self.observation, regions = self.observe(attempt)
@@ -162,7 +162,7 @@ class BinRunner:
         if body < 0:
             return dict(NO_LABELS)
         record, mesh = self.objects[body]
-        world_mesh, com = self.episode.posed_mesh(body, mesh, record.com)
+        world_mesh, com = self.episode.posed_mesh(body, mesh)
         mass, com = self.episode.loaded(body, record.mass, com)
         seed = int(np.random.default_rng((self.request.task.seed, self.request.trial, attempt, 4)).integers(2**31))
         return grasp_labels(world_mesh, com, mass, self.request.cup, point, approach, seed,

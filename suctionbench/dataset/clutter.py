@@ -128,7 +128,7 @@ class _BinUnit:
             i = self.slot[body]
             record = self.records[i]
             _, index, pixels, depths, angles, p_world, v_world = (np.array(col) for col in zip(*group, strict=True))
-            mesh, com = ep.posed_mesh(body, self.meshes[i], record.com)
+            mesh, com = ep.posed_mesh(body, self.meshes[i])
             mass, com = ep.loaded(body, record.mass, com)  # with what its neighbours press onto it
             labeller = SuctionLabeller(mesh, c.label, mass=mass, com=com)
             seed = int(np.random.SeedSequence((c.seed, self.unit.index, image, int(body))).generate_state(1)[0])

@@ -170,6 +170,7 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
     from suctionbench.dataset.render import TableScene
     from suctionbench.geometry.sampling import sample_surface_grasps, smoothed_approaches
     from suctionbench.objects.build import ObjectRecord
+    from suctionbench.objects.liquid import Liquid, com_at_rest
     from suctionbench.sensing.camera import CameraPoseConfig, resolve_camera, sample_camera_pose
     from suctionbench.sensing.noise import apply_depth_noise
     from suctionbench.sensing.thumbnails import (
@@ -190,6 +191,7 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
         use = rng.random(len(points)) < config.smoothed_approach_fraction
         approaches = np.where(use[:, None], smoothed, approaches)
     poses = [np.asarray(p["transform"]) for p in record.stable_poses[: config.stable_poses]]
+    liquid = Liquid.of(record, mesh)
     labellers: dict[int, Any] = {}
     labels: dict[int, Any] = {}
 
@@ -197,8 +199,8 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
         """The labeller of stable pose s (gravity rotated into the pose)."""
         if s not in labellers:
             gravity = poses[s][:3, :3].T @ np.array([0.0, 0.0, -STANDARD_GRAVITY])
-            labellers[s] = SuctionLabeller(mesh, config.label, mass=record.mass, com=np.asarray(record.com),
-                                           gravity=gravity)
+            com = com_at_rest(record, poses[s][:3, :3], liquid)  # a liquid levels in the pose
+            labellers[s] = SuctionLabeller(mesh, config.label, mass=record.mass, com=com, gravity=gravity)
         return labellers[s]
 
     def labels_in_pose(s: int) -> Any:

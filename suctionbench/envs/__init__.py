@@ -6,11 +6,13 @@ the analytic labeller are imported when an environment is first made. Ids are ve
 change of physics, spaces or reward makes a new ``-vN`` rather than changing an existing one, so
 results reported against an id stay comparable. v1 (2026-11-26): the simulated vacuum pulls along
 the cup's axis however an object's collision geometry is decomposed; v2 (2026-11-26): the leak test
-measures the object's real surface behind its convex parts (eval/README.md). Making an older id
-raises gymnasium's DeprecatedEnv, naming the ``-v2`` to use.
+measures the object's real surface behind its convex parts (eval/README.md); v3 (2026-11-27): a
+part-filled container's liquid levels in the pose the object rests in (`objects.liquid`), where it
+stayed in the end that was its bottom when upright. Making an older id raises gymnasium's
+DeprecatedEnv, naming the ``-v3`` to use.
 
     >>> import gymnasium, suctionbench
-    >>> env = gymnasium.make("suctionbench/SuctionPick-v2", object_set="basic")
+    >>> env = gymnasium.make("suctionbench/SuctionPick-v3", object_set="basic")
 """
 
 from __future__ import annotations
@@ -20,8 +22,8 @@ from typing import Any
 import gymnasium
 
 ENVIRONMENTS: dict[str, str] = {
-    "suctionbench/SuctionPick-v2": "suctionbench.envs.suction_pick:SuctionPickEnv",
-    "suctionbench/SuctionBin-v2": "suctionbench.envs.suction_bin:SuctionBinEnv",
+    "suctionbench/SuctionPick-v3": "suctionbench.envs.suction_pick:SuctionPickEnv",
+    "suctionbench/SuctionBin-v3": "suctionbench.envs.suction_bin:SuctionBinEnv",
 }
 """Environment id -> entry point ("module:Class"), imported only by gymnasium.make."""
 

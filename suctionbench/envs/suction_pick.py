@@ -1,4 +1,4 @@
-"""`suctionbench/SuctionPick-v2`: the benchmark's simulated pick as a gymnasium environment.
+"""`suctionbench/SuctionPick-v3`: the benchmark's simulated pick as a gymnasium environment.
 
 The environment is a thin layer over `suctionbench.sim.pick.PickRunner`: the runner builds the
 scene, places the object, renders the observation and executes the pick; this module only maps
@@ -159,7 +159,7 @@ class SuctionPickEnv(gymnasium.Env):
 
     ```python
     gymnasium.make(
-        "suctionbench/SuctionPick-v2",
+        "suctionbench/SuctionPick-v3",
         object_set="basic",         # basic, typical, adversarial, or a user set (suctionbench objects list)
         cup="default",              # cup preset (suctionbench.config.CUP_PRESETS), shared by sim and label
         camera="primesense",        # camera preset or intrinsics TOML file; sets H, W of the images
@@ -184,6 +184,9 @@ class SuctionPickEnv(gymnasium.Env):
       geometry is decomposed.
     - v2 (2026-11-26): the leak test measures the object's real surface behind the convex parts
       the lip rests on, so concavities the parts span (drain ribs, tooth gaps) leak.
+    - v3 (2026-11-27): a part-filled container's liquid (water, milk, shampoo, a can's soft drink)
+      levels in the pose the object comes to rest in, moving its centre of mass (a lying bottle's
+      to the middle of its length); the analytic labels use the same centre of mass.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 1}

@@ -343,7 +343,7 @@ def object_mass(mesh: trimesh.Trimesh, spec: ObjectSpec, mass: float | None = No
         note = f"; {props.mass * 1000:.2g} g raised to the {MIN_MASS * 1000:g} g floor of simulated objects"
         props = MassProperties(MIN_MASS, props.com, props.inertia * factor)
         model = MassModel(model.source + note, density=model.density * factor, shell=model.shell * factor,
-                          contents=model.contents * factor, contents_volume=model.contents_volume,
+                          contents=model.contents * factor, contents_volume=model.contents_volume, liquid=model.liquid,
                           part=model.part, part_density=model.part_density * factor)
     return model, props
 

@@ -585,14 +585,17 @@ def _typical(name: str, gen: str, description: str, mass: MassModel, **params) -
 
 def _container(what: str, wall_material: str, wall: float, contents: str | None = None, litres: float = 0.0):
     """A bottle, jar or jug: a `wall`-thick shell of `wall_material`, holding `litres` of `contents`
-    filled from the bottom (upright; the level follows from the shape)."""
+    filled from the bottom (upright; the level follows from the shape). A liquid levels again in the
+    pose the object rests in (`objects.liquid`); a paste stays where it was filled."""
     text = f"{what}: {wall * 1000:g} mm walls of {material(wall_material).source}"
     if contents is None:
         return MassModel(text, shell=shell_of(wall_material, wall))
     liquid = material(contents)
+    levels = " (a liquid: level in any pose it rests in)" if liquid.flows else " (frozen as filled)"
     return MassModel(
-        f"{text}; {litres * 1000:g} ml of {liquid.source} filled from the bottom",
+        f"{text}; {litres * 1000:g} ml of {liquid.source} filled from the bottom{levels}",
         shell=shell_of(wall_material, wall), contents=litres * 1e-3 * liquid.density, contents_volume=litres * 1e-3,
+        liquid=liquid.flows,
     )
 
 

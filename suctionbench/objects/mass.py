@@ -10,7 +10,8 @@ its object frame, +z up for containers):
   bottles, a print's perimeters), integrated exactly over the surface triangles;
 - `contents` (kg) filling the mesh from its bottom up to the level that holds `contents_volume`
   (m^3; None fills it all): liquid in a can sits below its headspace, so the centre of mass is
-  below the geometric centroid. The fill is frozen in the upright pose (no sloshing);
+  below the geometric centroid. Contents that are a `liquid` level again in whatever pose the
+  object comes to rest (`objects.liquid`); others (a paste, cereal) stay as filled upright;
 - a `part` of the shape (named in PARTS: the steel head of a hammer) whose density replaces the
   solid's inside it.
 
@@ -37,10 +38,12 @@ from suctionbench.errors import InputError
 
 @dataclass(frozen=True)
 class Material:
-    """A named material: density (kg/m^3) and where the figure comes from."""
+    """A named material: density (kg/m^3), where the figure comes from, and whether it flows (a
+    liquid, which levels in a container whatever its pose)."""
 
     density: float
     source: str
+    flows: bool = False
 
 
 def _wood(specific_gravity: float, species: str) -> Material:
@@ -69,10 +72,10 @@ MATERIALS: dict[str, Material] = {
     "paperboard": Material(750.0, "folding boxboard and greyboard, 0.6-0.9 g/cm^3 (grammage over caliper)"),
     "book_paper": Material(650.0, "uncoated book paper, bulk ~1.55 cm^3/g (book papers: 1.3-2.0 cm^3/g)"),
     "packing_tape": Material(950.0, "wound BOPP packing tape: 0.905 g/cm^3 film with ~1.05 g/cm^3 acrylic adhesive"),
-    "water": Material(998.0, "water at 20 degC"),
-    "soft_drink": Material(1040.0, "sugared soft drink, ~10.6 % sugar by mass, 1.04 g/ml"),
-    "milk": Material(1030.0, "whole cow's milk, 1.028-1.035 g/ml"),
-    "shampoo": Material(1020.0, "shampoo (aqueous surfactant solution), ~1.02 g/ml"),
+    "water": Material(998.0, "water at 20 degC", flows=True),
+    "soft_drink": Material(1040.0, "sugared soft drink, ~10.6 % sugar by mass, 1.04 g/ml", flows=True),
+    "milk": Material(1030.0, "whole cow's milk, 1.028-1.035 g/ml", flows=True),
+    "shampoo": Material(1020.0, "shampoo (aqueous surfactant solution), ~1.02 g/ml", flows=True),
     "peanut_butter": Material(1080.0, "peanut butter, ~1.08 g/ml (a label's 32 g serving is ~30 ml)"),
 }
 """Named materials by key. Wood densities follow the Wood Handbook's table, metals and glass the
@@ -108,6 +111,10 @@ class MassModel:
     contents_volume: float | None = None
     """Volume (m^3) the contents fill from the bottom of the mesh (its lowest z) up; None: all of it."""
 
+    liquid: bool = False
+    """Whether the contents are a liquid: at rest their surface is level whatever the object's pose
+    (`objects.liquid`), where other contents stay as filled upright."""
+
     part: str | None = None
     """Name of a part of the shape (PARTS key) whose density is `part_density` instead of `density`."""
 
@@ -137,6 +144,8 @@ class MassModel:
         data: dict[str, Any] = {"density": self.density, "shell": self.shell, "contents": self.contents}
         if self.contents_volume is not None:
             data["contents_volume"] = self.contents_volume
+        if self.liquid:
+            data["liquid"] = True
         if self.part is not None:
             data["part"], data["part_density"] = self.part, self.part_density
         return {k: round(v, 12) + 0.0 if isinstance(v, float) else v for k, v in data.items()}
@@ -226,8 +235,13 @@ def shell_properties(mesh: trimesh.Trimesh, areal_density: float) -> MassPropert
     return MassProperties(areal_density * total, com, np.trace(second) * np.eye(3) - second)
 
 
-def below(mesh: trimesh.Trimesh, level: float) -> trimesh.Trimesh:
-    """The part of a closed mesh below the height z = level (closed, via manifold3d)."""
+def below(mesh: trimesh.Trimesh, level: float, down: np.ndarray | None = None) -> trimesh.Trimesh:
+    """The part of a closed mesh below the height z = level (closed, via manifold3d); with `down`
+    (a unit vector, object frame), below the plane at `level` along -`down` instead of z."""
+    if down is not None:
+        turn = _down_to_minus_z(down)
+        held = below(mesh.copy().apply_transform(turn), level)
+        return held.apply_transform(np.linalg.inv(turn))
     lo, hi = mesh.bounds
     size = hi - lo + 0.02
     cutter = trimesh.creation.box(extents=[size[0], size[1], level - lo[2] + 0.01])
@@ -235,10 +249,19 @@ def below(mesh: trimesh.Trimesh, level: float) -> trimesh.Trimesh:
     return trimesh.boolean.intersection([mesh, cutter], engine="manifold")
 
 
-def fill_level(mesh: trimesh.Trimesh, volume: float, tolerance: float = 1e-9) -> float:
-    """Height z below which the closed mesh holds `volume` (m^3), by bisection (to `tolerance` m^3)."""
+def _down_to_minus_z(down: np.ndarray) -> np.ndarray:
+    """A rotation (4 x 4) turning the direction `down` into -z."""
+    down = np.asarray(down, dtype=float)
+    return trimesh.geometry.align_vectors(down / np.linalg.norm(down), [0.0, 0.0, -1.0])
+
+
+def fill_level(mesh: trimesh.Trimesh, volume: float, tolerance: float = 1e-9, down: np.ndarray | None = None) -> float:
+    """Height z below which the closed mesh holds `volume` (m^3), by bisection (to `tolerance` m^3);
+    with `down`, the height along -`down` (`below`)."""
     if not 0.0 < volume <= float(mesh.volume) * (1.0 + 1e-9):
         raise InputError(f"contents of {volume * 1e6:.4g} ml do not fit the object's {mesh.volume * 1e6:.4g} ml")
+    if down is not None:
+        return fill_level(mesh.copy().apply_transform(_down_to_minus_z(down)), volume, tolerance)
     lo, hi = float(mesh.bounds[0, 2]), float(mesh.bounds[1, 2])
     for _ in range(60):
         mid = 0.5 * (lo + hi)
@@ -247,6 +270,14 @@ def fill_level(mesh: trimesh.Trimesh, volume: float, tolerance: float = 1e-9) ->
             return mid
         lo, hi = (mid, hi) if held < volume else (lo, mid)
     return 0.5 * (lo + hi)
+
+
+def contents_properties(mesh: trimesh.Trimesh, mass: float, volume: float | None,
+                        down: np.ndarray | None = None) -> MassProperties:
+    """Contents of `mass` (kg) filling `volume` (m^3; None: all) of the closed mesh from its
+    bottom: the lowest z, or the lowest point along `down` (the object's pose)."""
+    held = mesh if volume is None else below(mesh, fill_level(mesh, volume, down=down), down)
+    return solid_properties(held, mass / float(held.volume))
 
 
 PARTS: dict[str, Callable[..., trimesh.Trimesh]] = {}
@@ -275,8 +306,7 @@ def mass_properties(mesh: trimesh.Trimesh, model: MassModel, params: dict[str, A
     if model.shell:
         components.append(shell_properties(mesh, model.shell))
     if model.contents:
-        held = mesh if model.contents_volume is None else below(mesh, fill_level(mesh, model.contents_volume))
-        components.append(solid_properties(held, model.contents / float(held.volume)))
+        components.append(contents_properties(mesh, model.contents, model.contents_volume))
     if model.part is not None:
         if model.part not in PARTS:
             from suctionbench.objects.shapes import register_all

@@ -27,10 +27,11 @@ def _carton(contents_kg: float, what: str, thickness: float = 0.0005) -> MassMod
 
 CAN_330_ML = MassModel(
     "full 330 ml drink can: 330 ml of soft drink (" + material("soft_drink").source + ") filling the can from "
-    "the bottom (headspace above) + aluminium can, 0.15 mm average wall (0.1 mm body, thicker base and lid; "
+    "the bottom (headspace above; a liquid, level in any pose the can rests in) "
+    "+ aluminium can, 0.15 mm average wall (0.1 mm body, thicker base and lid; "
     + material("aluminium").source + "); about 0.35 kg, as a full 330 ml can weighs",
     shell=shell_of("aluminium", 0.00015), contents=0.330e-3 * material("soft_drink").density,
-    contents_volume=0.330e-3,
+    contents_volume=0.330e-3, liquid=True,
 )
 """A full 330 ml drink can (basic/cylinder_can, typical/can_soda)."""
 

@@ -24,6 +24,7 @@ from suctionbench.contact.summary import POSITIVE_THRESHOLD
 from suctionbench.evaluation.runner import PREDICT_THRESHOLD
 from suctionbench.geometry.sampling import sample_surface_grasps
 from suctionbench.objects.build import ObjectRecord
+from suctionbench.objects.liquid import Liquid, com_at_rest
 from suctionbench.objects.mass import mass_cap
 from suctionbench.policies.base import SamplerConfig
 
@@ -44,8 +45,9 @@ def object_label_stats(record: ObjectRecord, grasps: int, seed: int, config: Lab
     """Seal share, mean robust label and robust share (rwr > 0.2) of uniform surface grasps."""
     pose = record.most_probable_pose()
     mesh = record.mesh()
+    liquid = Liquid.of(record, mesh.copy())
     mesh.apply_transform(pose)
-    com = pose[:3, :3] @ np.asarray(record.com) + pose[:3, 3]
+    com = pose[:3, :3] @ com_at_rest(record, pose[:3, :3], liquid) + pose[:3, 3]
     labeller = SuctionLabeller(mesh, config, mass=record.mass, com=com)
     points, approaches = sample_surface_grasps(mesh, grasps, np.random.default_rng(seed))
     labels = labeller.label(points, approaches, seed, metrics=("wr", "rwr"))
@@ -67,12 +69,13 @@ def pickability(
     lies in poses less probable than the build keeps, e.g. a polygonal cylinder's many sides)."""
     config = config or LabelConfig.for_episode(CUP_DEFAULT)
     mesh0 = record.mesh()
+    liquid = Liquid.of(record, mesh0)
     poses, pickable_mass = [], 0.0
     for index, pose_data in enumerate(record.stable_poses):
         pose = np.asarray(pose_data["transform"], dtype=float)
         mesh = mesh0.copy()
         mesh.apply_transform(pose)
-        com = pose[:3, :3] @ np.asarray(record.com) + pose[:3, 3]
+        com = pose[:3, :3] @ com_at_rest(record, pose[:3, :3], liquid) + pose[:3, 3]
         labeller = SuctionLabeller(mesh, config, mass=record.mass, com=com)
         rng = np.random.default_rng((seed, index))
         points, approaches = sample_surface_grasps(mesh, 8 * grasps, rng)

@@ -25,6 +25,7 @@ import numpy as np
 from suctionbench import minjerk
 from suctionbench.config import TRANSPORT_TIMES
 from suctionbench.sim.ik import solve_ik
+from suctionbench.sim.liquids import LEVEL_SHIFT, LiquidBodies
 from suctionbench.sim.scene import Scene
 from suctionbench.sim.suction import SuctionController
 from suctionbench.sim.yumi import HOME_RIGHT, JOINT_SPEED_LIMITS, RIGHT_ARM_JOINTS
@@ -48,6 +49,10 @@ CARRY_STEP = 0.01
 """Spacing (m) of the transport's IK waypoints along its straight line (the lift's 5 mm over its
 15 cm; the transport runs 0.2-0.5 m, and between waypoints 1 cm apart the joint-space chord strays
 from the line by well under a millimetre)."""
+
+LEVELLINGS = 4
+"""How often one `PickEpisode.settle` re-levels liquids that moved a centre of mass (a bottle
+that rolls on after its liquid ran down settles again, and its liquid levels again)."""
 
 REST_LEVER = 0.05
 """Length (m) that turns the object's rotation into a motion for the rest test: a point 5 cm from
@@ -228,6 +233,8 @@ class PickEpisode:
         """The last `planned_transport` (its grasp's point and unit approach, the plan): the scene,
         the configuration and the IK seed are fixed, so a grasp's plan is too."""
         self.tip = self.model.site(scene.cup.tip_site).id
+        self.liquids = LiquidBodies(self.model, {self.model.body(n).id: q for n, q in scene.liquids.items()})
+        """Object bodies holding a liquid, levelled whenever they come to rest (`settle`)."""
         self._is_robot = self._robot_geoms()
         self.trajectory: list[np.ndarray] = []
         self.tool = self.model.body(scene.cup.tool_body).id
@@ -266,6 +273,7 @@ class PickEpisode:
         """Home the arm and place the object: dropped from a random orientation (default, the
         paper's "shaken in a box") or in the given stable pose with a random planar pose; then let
         it settle."""
+        self.liquids.restore()
         mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[:] = self.scene.home_qpos
         self.data.ctrl[:] = self.scene.home_ctrl
@@ -304,13 +312,17 @@ class PickEpisode:
         """Call `step()` (one simulation step) until the object (or every free body of `bodies`,
         ids) has come to rest (stayed within `rest_motion` of one pose for `rest_time`), at most
         `limit` s (default `settle_time`); True if it came to rest. The placement, the gymnasium
-        environment's re-settling and the cluttered bin's drops share this rule."""
+        environment's re-settling and the cluttered bin's drops share this rule.
+
+        At rest, the liquids of the bodies that hold one level in their pose (`sim.liquids`); where
+        that moves a centre of mass by more than LEVEL_SHIFT, the body must come to rest again
+        (at most LEVELLINGS times, then the last level stands)."""
         c, dt = self.config, self.model.opt.timestep
         limit = c.settle_time if limit is None else limit
         window = max(1, round(c.rest_time / dt))
         ids = [self.object] if bodies is None else list(bodies)
         qpos = np.array([np.arange(self.qpos_of(b).start, self.qpos_of(b).stop) for b in ids])  # (B, 7)
-        mark, still = self.data.qpos[qpos].copy(), 0
+        mark, still, levellings = self.data.qpos[qpos].copy(), 0, 0
         for _ in range(int(limit / dt)):
             step()
             now = self.data.qpos[qpos]
@@ -320,6 +332,9 @@ class PickEpisode:
             if np.all(moved < c.rest_motion) and np.all(turn * REST_LEVER < c.rest_motion):
                 still += 1
                 if still >= window:
+                    if levellings < LEVELLINGS and self.liquids.level(self.data, ids) > LEVEL_SHIFT:
+                        levellings, still = levellings + 1, 0
+                        continue
                     return True
             else:
                 mark, still = now.copy(), 0

@@ -250,11 +250,14 @@ class PickRunner:
         return record
 
     def posed_object(self, pose: np.ndarray | None = None) -> tuple[Any, np.ndarray]:
-        """The object's mesh and centre of mass in the world, at `pose` (default: its current one)."""
+        """The object's mesh and centre of mass in the world, at `pose` (default: its current one).
+        The centre of mass is the simulated body's: with a liquid, as levelled when the object last
+        came to rest (`sim.liquids`)."""
         pose = self.object_pose() if pose is None else pose
         mesh = self.mesh.copy()
         mesh.apply_transform(pose)
-        return mesh, pose[:3, :3] @ np.asarray(self.record.com) + pose[:3, 3]
+        com = self.episode.model.body_ipos[self.episode.object]
+        return mesh, pose[:3, :3] @ com + pose[:3, 3]
 
     def label_grasp(self, point: np.ndarray, approach: np.ndarray, mesh: Any = None,
                     com: np.ndarray | None = None) -> dict[str, Any]:

@@ -6,13 +6,14 @@ around several objects and extra world geometry (the cluttered bin, `suctionbenc
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
 
 from suctionbench.config import CupConfig
 from suctionbench.objects.build import ObjectRecord
+from suctionbench.objects.liquid import Liquid
 from suctionbench.objects.mjcf import add_object_body
 from suctionbench.sensing.camera import CameraIntrinsics, add_camera
 from suctionbench.sim.cup import (
@@ -80,6 +81,8 @@ class Scene:
     """Full-length ctrl matching home_qpos (vacuum off)."""
     object_bodies: tuple[str, ...] = ()
     """Every object body of the scene, in the order they were given (one: `object_body`)."""
+    liquids: dict[str, Liquid] = field(default_factory=dict)
+    """The liquids of the object bodies that hold one, by body name (`sim.liquids`)."""
 
     def __post_init__(self) -> None:
         if not self.object_bodies:
@@ -161,6 +164,8 @@ def assemble_scene(
         model=model, cup=handles, object_body=names[0], camera="overhead", intrinsics=intrinsics,
         camera_pose=np.asarray(camera_pose, dtype=float), config=config, home_qpos=home_qpos, home_ctrl=home_ctrl,
         object_bodies=tuple(names),
+        liquids={name: liquid for record, name in zip(records, names, strict=True)
+                 if (liquid := Liquid.of(record)) is not None},
     )
 
 

@@ -145,3 +145,27 @@ def test_levelling_keeps_the_collision_bits_a_bin_episode_set():
     episode._unpark(brick)
     assert (m.body_contype[brick], m.body_conaffinity[brick]) == bits
     assert m.body_subtreemass[can] == pytest.approx(records[0].mass)  # the mass stays; only where it sits moves
+
+
+def test_a_levelled_body_collides_with_all_its_parts():
+    # MuJoCo's mid-phase keeps a body's geom bounding boxes in its inertial frame. When levelling
+    # moved the frame and the boxes stayed, the spray bottle (seed 1851474727: it lands on its
+    # flat side) rested with its nozzle part 7 mm inside the table, uncollided. At rest on a
+    # rigid table (5 ms contacts) no part may sink more than a millimetre, and the body's root box
+    # must bound every part in the new frame.
+    from suctionbench.sim.liquids import _matrix
+    from suctionbench.sim.pick import PickRequest, PickRunner
+
+    runner = PickRunner(PickRequest(object_key="typical/spray_bottle_cleaner", seed=1851474727))
+    runner.reset()
+    ep = runner.episode
+    m, d, body = ep.model, ep.data, ep.object
+    assert np.linalg.norm(m.body_ipos[body] - runner.record.com) > 0.02  # levelled
+    table = m.geom("table").id
+    parts = [g for g in range(m.ngeom) if m.geom_bodyid[g] == body and m.geom(g).name.startswith("object_collision")]
+    assert min(mujoco.mj_geomDistance(m, d, g, table, 0.05, None) for g in parts) > -1e-3
+    root = m.bvh_aabb[m.body_bvhadr[body]]
+    frame = _matrix(m.body_iquat[body])
+    for part in runner.record.part_meshes():
+        local = (np.asarray(part.vertices) - m.body_ipos[body]) @ frame
+        assert np.all(np.abs(local - root[:3]) <= root[3:] + 1e-6)

@@ -3,7 +3,8 @@
 A depth image shows an object's shape, not how its mass is spread: a bottle part-filled with
 liquid has its centre of mass towards its base, away from the shape's centre. This reads the
 runs' MCAP logs (the grasp point in the world and the object's pose at the first /tf message) and
-the objects' own records (centre of mass, mesh), and prints per trial the horizontal distance of
+the objects' own records (centre of mass, mesh; a liquid levelled in that pose, as the simulation
+of SuctionPick-v3 levels it: objects.liquid), and prints per trial the horizontal distance of
 the grasp from the centre of mass and from the shape's centre (the centroid of the solid its mesh
 bounds), beside the outcome.
 
@@ -19,6 +20,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from suctionbench.objects.liquid import Liquid, com_at_rest
 from suctionbench.objects.registry import load_object
 from suctionbench.runlog.reader import iter_messages, read_run
 
@@ -44,9 +46,11 @@ def trial_offsets(run_dir: Path, objects: list[str] | None) -> list[dict]:
             continue
         if name not in shapes:
             record = load_object(name)
-            shapes[name] = (np.array(record.com), record.mesh().center_mass)
-        com, centre = shapes[name]
+            mesh = record.mesh()
+            shapes[name] = (record, Liquid.of(record, mesh), mesh.center_mass)
+        record, liquid, centre = shapes[name]
         rotation, translation = object_pose(log["path"])
+        com = com_at_rest(record, rotation, liquid)
         grasp = np.array(result["grasp_world"][:3])
         com_w, centre_w = rotation @ com + translation, rotation @ centre + translation
         rows.append({"run": run_dir.name, "object": name, "success": bool(result["success"]),

@@ -27,6 +27,17 @@ DERIVED = ("body_subtreemass", "body_invweight0", "dof_invweight0", "dof_M0")
 """mjModel fields mj_setConst derives from bodies' mass properties at qpos0."""
 
 
+CORNERS = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
+"""The corners of a box of half-sizes 1, (8, 3)."""
+
+
+def _matrix(quat: np.ndarray) -> np.ndarray:
+    """Rotation matrix (3, 3) of a unit quaternion (w, x, y, z)."""
+    out = np.zeros(9)
+    mujoco.mju_quat2Mat(out, np.asarray(quat, dtype=float))
+    return out.reshape(3, 3)
+
+
 def principal_axes(inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """MuJoCo's form of an inertia tensor: principal moments (3,) and the unit quaternion (w, x, y,
     z) of the frame of principal axes in the body frame."""
@@ -46,6 +57,9 @@ class LiquidBodies:
         self.liquids = liquids
         self._built = {b: (model.body_ipos[b].copy(), model.body_iquat[b].copy(), model.body_inertia[b].copy())
                        for b in liquids}
+        self._bvh = {b: slice(int(model.body_bvhadr[b]), int(model.body_bvhadr[b] + model.body_bvhnum[b]))
+                     for b in liquids}
+        self._built_bvh = {b: model.bvh_aabb[nodes].copy() for b, nodes in self._bvh.items()}
         self._changed = False
 
     def level(self, data: mujoco.MjData, bodies: Iterable[int]) -> float:
@@ -62,6 +76,7 @@ class LiquidBodies:
             moved = max(moved, float(np.linalg.norm(props.com - m.body_ipos[b])))
             m.body_ipos[b] = props.com
             m.body_inertia[b], m.body_iquat[b] = principal_axes(props.inertia)
+            self._move_bounding_boxes(b)
             levelled = self._changed = True
         if levelled:
             self._set_constants()
@@ -73,8 +88,24 @@ class LiquidBodies:
             return
         for b, (ipos, iquat, inertia) in self._built.items():
             self.model.body_ipos[b], self.model.body_iquat[b], self.model.body_inertia[b] = ipos, iquat, inertia
+            self.model.bvh_aabb[self._bvh[b]] = self._built_bvh[b]
         self._set_constants()
         self._changed = False
+
+    def _move_bounding_boxes(self, body: int) -> None:
+        """Re-express the body's collision bounding boxes in its new inertial frame. MuJoCo's
+        mid-phase keeps each body's tree of geom bounding boxes in the body's inertial frame (centre
+        of mass, principal axes): left in the built frame, they miss the geoms by the frame's move,
+        and a part of the object passes through the table uncollided. Each built box's corners are
+        taken to the new frame and bounded again (a box that turned grows: still conservative)."""
+        m = self.model
+        ipos0, iquat0, _ = self._built[body]
+        built = self._built_bvh[body]
+        turn0, turn = _matrix(iquat0), _matrix(m.body_iquat[body])
+        corners = built[:, None, :3] + built[:, None, 3:] * CORNERS[None]  # (K, 8, 3), built frame
+        moved = (ipos0 + corners @ turn0.T - m.body_ipos[body]) @ turn  # body frame, then the new frame
+        lo, hi = moved.min(axis=1), moved.max(axis=1)
+        m.bvh_aabb[self._bvh[body]] = np.hstack([(lo + hi) / 2.0, (hi - lo) / 2.0])
 
     def _set_constants(self) -> None:
         """Recompute the model's quantities that derive from mass properties (DERIVED: the inverse

@@ -153,7 +153,7 @@ def test_a_levelled_body_collides_with_all_its_parts():
     # flat side) rested with its nozzle part 7 mm inside the table, uncollided. At rest on a
     # rigid table (5 ms contacts) no part may sink more than a millimetre, and the body's root box
     # must bound every part in the new frame.
-    from suctionbench.sim.liquids import _matrix
+    from suctionbench.sim.liquids import rotation_matrix
     from suctionbench.sim.pick import PickRequest, PickRunner
 
     runner = PickRunner(PickRequest(object_key="typical/spray_bottle_cleaner", seed=1851474727))
@@ -165,7 +165,7 @@ def test_a_levelled_body_collides_with_all_its_parts():
     parts = [g for g in range(m.ngeom) if m.geom_bodyid[g] == body and m.geom(g).name.startswith("object_collision")]
     assert min(mujoco.mj_geomDistance(m, d, g, table, 0.05, None) for g in parts) > -1e-3
     root = m.bvh_aabb[m.body_bvhadr[body]]
-    frame = _matrix(m.body_iquat[body])
+    frame = rotation_matrix(m.body_iquat[body])
     for part in runner.record.part_meshes():
         local = (np.asarray(part.vertices) - m.body_ipos[body]) @ frame
         assert np.all(np.abs(local - root[:3]) <= root[3:] + 1e-6)

@@ -31,7 +31,7 @@ CORNERS = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in
 """The corners of a box of half-sizes 1, (8, 3)."""
 
 
-def _matrix(quat: np.ndarray) -> np.ndarray:
+def rotation_matrix(quat: np.ndarray) -> np.ndarray:
     """Rotation matrix (3, 3) of a unit quaternion (w, x, y, z)."""
     out = np.zeros(9)
     mujoco.mju_quat2Mat(out, np.asarray(quat, dtype=float))
@@ -101,7 +101,7 @@ class LiquidBodies:
         m = self.model
         ipos0, iquat0, _ = self._built[body]
         built = self._built_bvh[body]
-        turn0, turn = _matrix(iquat0), _matrix(m.body_iquat[body])
+        turn0, turn = rotation_matrix(iquat0), rotation_matrix(m.body_iquat[body])
         corners = built[:, None, :3] + built[:, None, 3:] * CORNERS[None]  # (K, 8, 3), built frame
         moved = (ipos0 + corners @ turn0.T - m.body_ipos[body]) @ turn  # body frame, then the new frame
         lo, hi = moved.min(axis=1), moved.max(axis=1)

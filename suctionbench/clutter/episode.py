@@ -149,13 +149,7 @@ class BinEpisode(PickEpisode):
         the pile settle after each drop."""
         if stable_pose is not None:
             raise ValueError("a bin is filled by drops; stable poses are for single-object scenes")
-        self.liquids.restore()
-        mujoco.mj_resetData(self.model, self.data)
-        self.data.qpos[:] = self.scene.home_qpos
-        self.data.ctrl[:] = self.scene.home_ctrl
-        self.data.qpos[self.arm_qpos] = self._ready_configuration()
-        self.cup.release(self.data)
-        self.trajectory, self.watch_collisions = [], False
+        self._home()
         self.present, self.spilled, self.placement_error, self.unsettled = [], [], None, 0
         for b in self.bodies:
             self._park(b)

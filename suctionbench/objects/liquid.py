@@ -3,8 +3,8 @@
 An object is built with its contents filled upright, from the bottom of its mesh (`objects.mass`).
 A liquid does not stay there: a part-filled bottle lying on its side holds its liquid along its
 whole length, under a level surface, not in the end that was its bottom. Where the liquid lies
-moves the centre of mass by centimetres (250 ml in a 0.5 l spray bottle: ~35 mm between upright
-and lying), and the centre of mass decides whether a suction grasp holds against gravity's torque.
+moves the centre of mass by centimetres (the spray cleaner's 250 ml, lying: 45 mm along its axis
+and 13 mm across), and the centre of mass decides whether a suction grasp holds against gravity's torque.
 
 The model is quasi-static: whenever the object is at rest, the liquid's surface is the plane
 perpendicular to gravity that leaves the liquid's volume below it, inside the object's closed
@@ -67,9 +67,7 @@ class Liquid:
     def properties(self, down: np.ndarray) -> MassProperties:
         """The whole object's mass properties (object frame) with the liquid level for gravity
         along `down` (object frame; any length)."""
-        down = np.asarray(down, dtype=float)
-        liquid = contents_properties(self.mesh, self.mass, self.volume, down=down / np.linalg.norm(down))
-        return self.dry + liquid
+        return self.dry + contents_properties(self.mesh, self.mass, self.volume, down=down)
 
 
 def com_at_rest(record: ObjectRecord, rotation: np.ndarray, liquid: Liquid | None) -> np.ndarray:

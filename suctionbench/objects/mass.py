@@ -209,6 +209,10 @@ class MassProperties:
         d = self.com - np.asarray(point, dtype=float)
         return self.inertia + self.mass * (float(d @ d) * np.eye(3) - np.outer(d, d))
 
+    def rotated(self, rotation: np.ndarray) -> MassProperties:
+        """The same body expressed in a frame turned by `rotation` (3 x 3, old to new axes)."""
+        return MassProperties(self.mass, rotation @ self.com, rotation @ self.inertia @ rotation.T)
+
     def scaled_to(self, mass: float) -> MassProperties:
         """The same body's distribution of mass, weighing `mass`."""
         return MassProperties(mass, self.com, self.inertia * (mass / self.mass))
@@ -235,13 +239,8 @@ def shell_properties(mesh: trimesh.Trimesh, areal_density: float) -> MassPropert
     return MassProperties(areal_density * total, com, np.trace(second) * np.eye(3) - second)
 
 
-def below(mesh: trimesh.Trimesh, level: float, down: np.ndarray | None = None) -> trimesh.Trimesh:
-    """The part of a closed mesh below the height z = level (closed, via manifold3d); with `down`
-    (a unit vector, object frame), below the plane at `level` along -`down` instead of z."""
-    if down is not None:
-        turn = _down_to_minus_z(down)
-        held = below(mesh.copy().apply_transform(turn), level)
-        return held.apply_transform(np.linalg.inv(turn))
+def below(mesh: trimesh.Trimesh, level: float) -> trimesh.Trimesh:
+    """The part of a closed mesh below the height z = level (closed, via manifold3d)."""
     lo, hi = mesh.bounds
     size = hi - lo + 0.02
     cutter = trimesh.creation.box(extents=[size[0], size[1], level - lo[2] + 0.01])
@@ -249,19 +248,10 @@ def below(mesh: trimesh.Trimesh, level: float, down: np.ndarray | None = None) -
     return trimesh.boolean.intersection([mesh, cutter], engine="manifold")
 
 
-def _down_to_minus_z(down: np.ndarray) -> np.ndarray:
-    """A rotation (4 x 4) turning the direction `down` into -z."""
-    down = np.asarray(down, dtype=float)
-    return trimesh.geometry.align_vectors(down / np.linalg.norm(down), [0.0, 0.0, -1.0])
-
-
-def fill_level(mesh: trimesh.Trimesh, volume: float, tolerance: float = 1e-9, down: np.ndarray | None = None) -> float:
-    """Height z below which the closed mesh holds `volume` (m^3), by bisection (to `tolerance` m^3);
-    with `down`, the height along -`down` (`below`)."""
+def fill_level(mesh: trimesh.Trimesh, volume: float, tolerance: float = 1e-9) -> float:
+    """Height z below which the closed mesh holds `volume` (m^3), by bisection (to `tolerance` m^3)."""
     if not 0.0 < volume <= float(mesh.volume) * (1.0 + 1e-9):
         raise InputError(f"contents of {volume * 1e6:.4g} ml do not fit the object's {mesh.volume * 1e6:.4g} ml")
-    if down is not None:
-        return fill_level(mesh.copy().apply_transform(_down_to_minus_z(down)), volume, tolerance)
     lo, hi = float(mesh.bounds[0, 2]), float(mesh.bounds[1, 2])
     for _ in range(60):
         mid = 0.5 * (lo + hi)
@@ -275,8 +265,13 @@ def fill_level(mesh: trimesh.Trimesh, volume: float, tolerance: float = 1e-9, do
 def contents_properties(mesh: trimesh.Trimesh, mass: float, volume: float | None,
                         down: np.ndarray | None = None) -> MassProperties:
     """Contents of `mass` (kg) filling `volume` (m^3; None: all) of the closed mesh from its
-    bottom: the lowest z, or the lowest point along `down` (the object's pose)."""
-    held = mesh if volume is None else below(mesh, fill_level(mesh, volume, down=down), down)
+    bottom: the lowest z, or the lowest point along the direction `down` (the object's pose: the
+    fill is found with the mesh turned so that `down` is -z, and turned back)."""
+    if down is not None and volume is not None:
+        turn = trimesh.geometry.align_vectors(np.asarray(down, dtype=float), [0.0, 0.0, -1.0])  # 4 x 4
+        turned = mesh.copy().apply_transform(turn)
+        return contents_properties(turned, mass, volume).rotated(turn[:3, :3].T)
+    held = mesh if volume is None else below(mesh, fill_level(mesh, volume))
     return solid_properties(held, mass / float(held.volume))
 
 

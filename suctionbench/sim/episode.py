@@ -273,14 +273,7 @@ class PickEpisode:
         """Home the arm and place the object: dropped from a random orientation (default, the
         paper's "shaken in a box") or in the given stable pose with a random planar pose; then let
         it settle."""
-        self.liquids.restore()
-        mujoco.mj_resetData(self.model, self.data)
-        self.data.qpos[:] = self.scene.home_qpos
-        self.data.ctrl[:] = self.scene.home_ctrl
-        self.data.qpos[self.arm_qpos] = self._ready_configuration()
-        self.cup.release(self.data)
-        self.trajectory = []
-        self.watch_collisions = False
+        self._home()
         cx, cy = self.scene.config.workspace_centre
         if stable_pose is None:
             quat = _random_quat(rng)
@@ -307,6 +300,17 @@ class PickEpisode:
                 self.placement_error = f"the object did not come to rest within {self.config.settle_time:g} s"
         except _Unstable as exc:
             self.placement_error = f"during placement: {exc}"
+
+    def _home(self) -> None:
+        """The start of every reset: objects' liquids as built, MuJoCo's state reset, the arm at
+        its ready configuration with the vacuum off, nothing recorded or watched."""
+        self.liquids.restore()
+        mujoco.mj_resetData(self.model, self.data)
+        self.data.qpos[:] = self.scene.home_qpos
+        self.data.ctrl[:] = self.scene.home_ctrl
+        self.data.qpos[self.arm_qpos] = self._ready_configuration()
+        self.cup.release(self.data)
+        self.trajectory, self.watch_collisions = [], False
 
     def settle(self, step: Any, bodies: Any = None, limit: float | None = None) -> bool:
         """Call `step()` (one simulation step) until the object (or every free body of `bodies`,

@@ -392,3 +392,92 @@ def bench_import(*, mesh: str, units: str, scale: float, cores: int) -> dict[str
         "seconds_one_by_one": round(seconds["one_by_one"], 2),
         "speedup": round(seconds["one_by_one"] / seconds["side_by_side"], 2), "same_object": bool(same),
     }
+
+
+def _write_timing_dataset(directory, datapoints: int, seed: int) -> None:
+    """A dataset of `datapoints` random table-top thumbnails for timing the trainer: planes at
+    0.55-0.65 m tilted up to ~30 degrees with 1 mm noise, random poses and metrics. Its content
+    does not matter (the work per image is the network's and the loader's); its shape, fields and
+    splits are those `generate` writes, so the trainer reads it as it reads a real one."""
+    from suctionbench.dataset.storage import DatasetWriter, write_splits
+    from suctionbench.dataset.storage.format import FIELDS
+
+    rng = np.random.default_rng(seed)
+    per_shard = 1000
+    yy, xx = np.mgrid[0:32, 0:32].astype(np.float32) - 15.5
+    writer = DatasetWriter(directory, per_shard)
+    for shard, start in enumerate(range(0, datapoints, per_shard)):
+        k = min(per_shard, datapoints - start)
+        slope = rng.uniform(-0.6, 0.6, (2, k, 1, 1)).astype(np.float32) * 0.001  # m per pixel at 1 mm/px
+        depth = rng.uniform(0.55, 0.65, (k, 1, 1)).astype(np.float32)
+        plane = depth + slope[0] * xx + slope[1] * yy
+        metric = rng.uniform(0, 1, k).astype(np.float32)
+        fields = {
+            "depth_ims_tf_table": plane + rng.normal(0, 0.001, plane.shape).astype(np.float32),
+            "context_ims_tf_table": plane + rng.normal(0, 0.001, plane.shape).astype(np.float32),
+            "robust_suction_wrench_resistance": metric, "wrench_resistance": (metric > 0.2).astype(np.uint8),
+            "seal_flags": np.ones(k, np.uint8),
+            "object_labels": (np.arange(start, start + k) // 100).astype(np.int32),
+            "image_labels": (np.arange(start, start + k) // 10).astype(np.int32),
+            "pose_labels": np.zeros(k, np.int32), "grasp_labels": np.arange(k, dtype=np.int32) % 10,
+        }
+        fields["depth_ims_tf_table"] = fields["depth_ims_tf_table"][..., None]
+        fields["context_ims_tf_table"] = fields["context_ims_tf_table"][..., None]
+        for name in ("hand_poses", "object_context"):
+            spec = FIELDS[name]
+            fields[name] = rng.uniform(0, 1, (k, *spec.shape)).astype(spec.dtype)
+        writer.write_shard(shard, fields)
+    writer.write_card({
+        "config": {"label_threshold": 0.2}, "camera": {"name": "primesense", "fx": 525.0, "fy": 525.0},
+        "fingerprint": f"bench-train-{datapoints}-{seed}", "datapoints": datapoints, "positive_rate": 0.8,
+    })
+    ids = np.arange(datapoints)
+    write_splits(directory, ids // 10, ids // 100, seed=seed)
+
+
+def bench_train(*, archs: list[str], datapoints: int, reference_datapoints: int, device: str,
+                batch_size: int, seed: int, cores: int) -> dict[str, Any]:
+    """Training images/s of each network on `device` (cuda: bfloat16 autocast) against the CPU in
+    float32 (the reference) in the same run: one epoch of gqcnn's recipe (SGD, noise and flip
+    augmentation, shard pooling) on a written dataset of `datapoints` random thumbnails (the CPU
+    on the first `reference_datapoints` of them), and the hours 25 epochs of 2.8 M datapoints (the
+    Dex-Net 3.0 schedule) would take at each rate. Validation and fit scoring are not timed."""
+    import tempfile
+    from pathlib import Path
+
+    import torch
+
+    from suctionbench.learning.models import ARCHITECTURES, build_model, count_parameters
+    from suctionbench.learning.train import TrainConfig, _device, train
+
+    used_cores = _limit_cores(cores)
+    if datapoints < 1000 or not 1000 <= reference_datapoints <= datapoints:
+        raise InputError("bench train: need --datapoints >= 1000 and 1000 <= --reference-datapoints <= --datapoints")
+    if not archs:
+        raise InputError("--archs: name at least one network")
+    for arch in archs:
+        if arch not in ARCHITECTURES:
+            raise InputError(f"--archs: architecture '{arch}' unknown (known: {', '.join(ARCHITECTURES)})")
+    fast = _device(device)
+    torch.set_num_threads(used_cores)
+    result: dict[str, Any] = {"device": torch.cuda.get_device_name(fast) if fast.type == "cuda" else "cpu",
+                              "cores": used_cores, "datapoints": datapoints, "batch_size": batch_size}
+    dex_net_images = 25 * 2_800_000
+    with tempfile.TemporaryDirectory(prefix="suctionbench-bench-train-") as folder:
+        data = Path(folder) / "data"
+        _write_timing_dataset(data, datapoints, seed)
+        for arch in archs:
+            result[f"{arch}_parameters"] = count_parameters(build_model(arch))
+            rates = {}
+            for name, where, limit in (("cpu", "cpu", reference_datapoints), (fast.type, str(fast), datapoints)):
+                if name in rates:
+                    continue
+                config = TrainConfig(arch=arch, epochs=1, batch_size=batch_size, device=where, seed=seed,
+                                     max_train_datapoints=limit, max_val_datapoints=1000, fit_datapoints=1000)
+                metrics = train(data, Path(folder) / f"{arch}-{name}", config, command="bench train")
+                rates[name] = float(metrics["train_images_per_s"])
+                result[f"{arch}_{name}_images_per_s"] = round(rates[name], 1)
+                result[f"{arch}_{name}_hours_dex_net_schedule"] = round(dex_net_images / rates[name] / 3600, 2)
+            if fast.type != "cpu":
+                result[f"{arch}_{fast.type}_speedup"] = round(rates[fast.type] / rates["cpu"], 1)
+    return result

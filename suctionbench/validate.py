@@ -74,7 +74,7 @@ OPTION_RULES: dict[str, Rule] = {
     "trials": COUNT, "datapoints": COUNT, "grasps": COUNT, "grasps_per_object": COUNT, "samples": COUNT,
     "epochs": COUNT, "batch_size": Rule(1, 2**20), "max_datapoints": COUNT, "max_val_datapoints": COUNT,
     "count": COUNT, "scenes": COUNT, "attempts": Rule(1, 1000, meaning="attempts timed per bin size"),
-    "episodes": COUNT, "memory_grasps": COUNT, "reference_grasps": Rule(0, COUNT_MAX),
+    "episodes": COUNT, "memory_grasps": COUNT, "reference_datapoints": COUNT, "reference_grasps": Rule(0, COUNT_MAX),
     "top": Rule(0, COUNT_MAX, meaning="rows of the table; 0 = none"),
     "proposals_per_image": COUNT,
     "average": Rule(0.0, 1.0, low_open=True, meaning="the moving average's decay per step, below 1"),
@@ -90,7 +90,7 @@ must have one (tests/test_fuzz.py checks this); a float option is finite in any 
 
 SIZE_OPTIONS = frozenset({"trials", "datapoints", "grasps", "grasps_per_object", "samples", "epochs", "batch_size",
                           "max_datapoints", "max_val_datapoints", "count", "scenes", "episodes", "memory_grasps",
-                          "reference_grasps"})
+                          "reference_grasps", "reference_datapoints"})
 """The options that set how much work, memory or disk a command takes: named when memory runs out."""
 
 

@@ -408,6 +408,11 @@ def cases(p: dict[str, Path]) -> list[Case]:
     for argv in (["--datapoints", "0"], ["--datapoints", "-1"], ["--workers", "-1"], ["--objects", "nope"],
                  ["--seed", "-1"]):
         add("bench generate", "bench", "generate", "--datapoints", "4", "--workers", "1", *argv)
+    for argv in (["--datapoints", "0"], ["--datapoints", "-1"], ["--reference-datapoints", "5000"],
+                 ["--archs", ",,,"], ["--archs", "nope"], ["--device", "tpu"], ["--device", "cuda:x"],
+                 ["--batch-size", "0"], ["--cores", "-1"], ["--seed", "-1"]):
+        add("bench train", "bench", "train", "--device", "cpu", "--datapoints", "1000",
+            "--reference-datapoints", "1000", *argv)
     for argv in (["--scale", "nan"], ["--scale", "-1"], ["--cores", "-1"], ["--units", "ft"]):
         add("bench import", "bench", "import", p["mesh_garbage.stl"], *argv)
     add("bench import", "bench", "import", p["mesh_garbage.stl"])

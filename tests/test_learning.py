@@ -842,3 +842,24 @@ def test_a_cpu_run_resumes_on_cuda_with_augmentation_on_the_gpu(dataset, tmp_pat
     batch = data.load_shard(data.shards[0])
     q = model.predict(batch.images, batch.poses)
     assert np.all(np.isfinite(q)) and np.all((q >= 0) & (q <= 1))
+
+
+def test_bench_train_times_one_epoch_on_a_dataset_it_writes_and_removes():
+    # The timing dataset is written in the trainer's format (it trains on it) into a temporary
+    # folder; the Dex-Net schedule's hours are 25 epochs x 2.8 M images at the measured rate.
+    import tempfile
+    from pathlib import Path
+
+    from suctionbench.bench import bench_train
+
+    before = set(Path(tempfile.gettempdir()).glob("suctionbench-bench-train-*"))
+    result = bench_train(archs=["compact"], datapoints=1000, reference_datapoints=1000, device="cpu",
+                         batch_size=64, seed=0, cores=0)
+    assert result["device"] == "cpu" and result["compact_parameters"] == 36_082
+    rate = result["compact_cpu_images_per_s"]
+    assert rate > 0
+    assert result["compact_cpu_hours_dex_net_schedule"] == pytest.approx(25 * 2.8e6 / rate / 3600, rel=0.01)
+    assert set(Path(tempfile.gettempdir()).glob("suctionbench-bench-train-*")) == before
+    with pytest.raises(InputError, match="device 'tpu'"):
+        bench_train(archs=["compact"], datapoints=1000, reference_datapoints=1000, device="tpu",
+                    batch_size=64, seed=0, cores=0)

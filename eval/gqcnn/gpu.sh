@@ -4,24 +4,20 @@
 # of a machine with a CUDA GPU, torch and the project's dependencies importable:
 #   eval/gqcnn/gpu.sh OUT [BUDGET_S]
 # Steps (each logged with its second since the start to OUT/log.txt):
-#   1. `pytest -m gpu`: the bfloat16 CUDA training path (tests/test_learning.py).
+#   1. `pytest -m gpu`: the bfloat16 CUDA training path (tests/test_learning.py); `suctionbench
+#      bench train`: training images/s on the GPU against the machine's CPU (batch 64 and 1024).
 #   2. The 1,500-object training corpus (seed 0, as the shipped model's), a rate probe on its first
-#      32 objects, then `generate` with as many datapoints as the probe's rate fills GEN_S seconds
+#      32 objects (on 1 worker, the scaling reference, and on WORKERS), then `generate` with as many datapoints as the probe's rate fills GEN_S seconds
 #      with (a multiple of DP_STEP, within DP_MIN-1,200,000), assembled on every core.
 #   3. ARCHS trained at once on the GPU, each one epoch at a time until the deadline
 #      (eval/gqcnn/train_until.py: soft target, weights' average 0.9995, object-wise split).
 #   4. Held-out accuracy and AP of the shipped default and of each trained model on the dataset's
 #      object-wise validation split (eval/bin/heldout.py).
-# OUT gets log.txt, heldout.jsonl, dataset_card.json, and per arch <arch>.json (its model card); the
-# first arch's weights and PR curve too (<arch>.safetensors, <arch>_pr.png).
-# The lent H200 had torch 2.11 but not the project's dependencies and no network. They went along as
-# cp312 manylinux wheels (trimesh, embreex, rtree, manifold3d, qpsolvers, clarabel, cffi, pycparser,
-# tomli-w, mujoco 3.17.0 without its mujoco/experimental folder, pyopengl, glfw, gymnasium,
-# farama-notifications, typer, pydantic, pydantic-core, annotated-types, typing-inspection) with the
-# EGL loader packages (libegl1, libglvnd0, libopengl0, libgl1, libglx0, libgles2), set up before
-# this script ran with: `dpkg -x` of each .deb into /, ldconfig, __EGL_VENDOR_LIBRARY_FILENAMES at
-# the driver's 10_nvidia.json, each wheel unpacked (`python3 -m zipfile -e`) into /tmp/site,
-# PYTHONPATH=/tmp/site MUJOCO_GL=egl, `pip install --no-deps --no-build-isolation --no-index -e .`.
+# OUT gets log.txt, bench_train.jsonl, heldout.jsonl, dataset_card.json, and per arch <arch>.json (its model card); the
+# first arch's weights too (<arch>.safetensors): 8 files, what a lease returns at most.
+# A lent machine has torch but not the project's other dependencies, and no network: run
+# eval/gqcnn/gpu_wheels.sh here first (wheels and EGL loaders into .whl/ and .gl/, carried), then
+# there `source eval/gqcnn/gpu_setup.sh` before this script.
 set -u
 OUT=${1:?output directory}
 BUDGET=${2:-560}
@@ -39,8 +35,14 @@ mkdir -p "$OUT" "$WORK"
 exec > >(tee -a "$OUT/log.txt") 2>&1
 log() { echo "[$(( $(date +%s) - T0 )) s] $*"; }
 
+[ -n "${SKIP_CHECKS:-}" ] || {
 log "1. CUDA tests"
 timeout 150 $PY -m pytest -q -p no:cacheprovider -m gpu tests/test_learning.py 2>&1 | tail -n 6
+for batch in 64 1024; do
+  timeout 90 $PY -m suctionbench bench train --archs dn3,context-pose --datapoints 40000 --reference-datapoints 4000 \
+    --batch-size "$batch" --device "$DEVICE" --json | tail -n 1 | tee -a "$OUT/bench_train.jsonl"
+done
+}
 
 log "2. corpus of $COUNT objects on $WORKERS workers"
 $PY -m suctionbench objects generate --count "$COUNT" --seed 0 --out "$WORK/corpus" --workers "$WORKERS" \
@@ -48,6 +50,8 @@ $PY -m suctionbench objects generate --count "$COUNT" --seed 0 --out "$WORK/corp
 mkdir -p "$WORK/probe_objects"
 find "$WORK/corpus" -mindepth 2 -maxdepth 2 -type d | sort | head -n 32 | xargs -I{} cp -r {} "$WORK/probe_objects/"
 PER_OBJECT=320
+$PY -m suctionbench generate --objects "$WORK/probe_objects" --datapoints $((32 * PER_OBJECT / 4)) --out "$WORK/probe1" \
+  --workers 1 --seed 1 --overwrite --json | tail -n 1
 $PY -m suctionbench generate --objects "$WORK/probe_objects" --datapoints $((32 * PER_OBJECT)) --out "$WORK/probe" \
   --workers "$WORKERS" --seed 1 --overwrite --json | tail -n 1
 RATE=$($PY -c "import json; print(json.load(open('$WORK/probe/config.json'))['generation']['datapoints_per_s'])")
@@ -71,7 +75,6 @@ wait "${pids[@]}"  # not a bare wait: that would also wait for the log's tee
 for arch in $ARCHS; do tail -n 3 "$WORK/$arch.jsonl"; cp "$WORK/models/$arch/model.json" "$OUT/$arch.json"; done
 first=${ARCHS%% *}
 cp "$WORK/models/$first/model.safetensors" "$OUT/$first.safetensors"
-cp "$WORK/models/$first/precision_recall.png" "$OUT/${first}_pr.png" 2>/dev/null
 
 log "4. held-out scores"
 models=(assets/models/gqcnn-context-pose-avg)  # the shipped default, as the reference

@@ -1,4 +1,4 @@
-"""`suctionbench bench label|episode|bin|agreement|generate|plan|import`: speed and agreement figures."""
+"""`suctionbench bench label|episode|bin|agreement|generate|plan|import|train`: speed and agreement figures."""
 
 from __future__ import annotations
 
@@ -186,3 +186,23 @@ def bench_import_cmd(
 
     _run_bench(as_json, "bench import: side by side vs one by one", "bench_import", mesh=mesh, units=units,
                scale=scale, cores=cores)
+
+
+@bench_app.command("train")
+def bench_train_cmd(
+    archs: Annotated[str, typer.Option(help="Comma-separated networks to time.")] = "dn3,context-pose",
+    datapoints: Annotated[int, typer.Option(help="Random thumbnails written and trained on `--device`.")] = 20000,
+    reference_datapoints: Annotated[int, typer.Option(help="Of those, the ones the CPU reference trains on.")] = 5000,
+    device: Annotated[str, typer.Option(help="Device timed against the CPU: cuda (bfloat16) or cpu.")] = "cuda",
+    batch_size: Annotated[int, typer.Option(help="Datapoints per SGD step (gqcnn: 64).")] = 64,
+    cores: Annotated[int, typer.Option(help="CPU cores the process may use (0 = all).")] = 0,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Training images/s of each network on the GPU (bfloat16) against the CPU (float32) in one
+    run, and the hours the Dex-Net 3.0 schedule (25 epochs of 2.8 M datapoints) takes at each."""
+
+    names = [a.strip() for a in archs.split(",") if a.strip()]
+    _run_bench(as_json, "bench train: --device vs cpu", "bench_train", archs=names, datapoints=datapoints,
+               reference_datapoints=reference_datapoints, device=device, batch_size=batch_size, seed=seed,
+               cores=cores)

@@ -11,7 +11,7 @@ import trimesh
 
 from suctionbench.config import CUP_DEFAULT, STANDARD_GRAVITY, CupConfig
 from suctionbench.errors import InputError
-from suctionbench.objects.build import build_object
+from suctionbench.objects.build import ObjectRecord, build_object
 from suctionbench.objects.importer import import_mesh
 from suctionbench.objects.mass import (
     MATERIALS,
@@ -136,10 +136,24 @@ def test_object_above_the_cap_is_rejected(tmp_path):
     assert not (tmp_path / "steel_cube").exists()
     path = tmp_path / "cube.stl"
     cube.export(path)
-    with pytest.raises(InputError, match="mass cap"):
-        import_mesh(path, set_name="custom", name="heavy", mass=0.5, root=tmp_path / "objs")
     ok = import_mesh(path, set_name="custom", name="light", mass=0.3, root=tmp_path / "objs")
-    assert ok.mass == pytest.approx(0.3) and "given" in ok.mass_source
+    assert ok.mass == pytest.approx(0.3) and "given" in ok.mass_source and "warnings" not in ok.params
+
+
+def test_an_import_above_the_cap_is_kept_with_a_warning_naming_the_cups_that_carry_it(tmp_path):
+    # The sets must be carried by the default cup (0.411 kg); an imported object need not be: the
+    # paper's cup carries 12.9 kg, and an object no cup holds is a fair test of a policy. A 40 cm
+    # PLA cube: at 20 % infill 1240 (0.2 x 0.064 + 0.8 x 0.96 x 0.0008) = 16.6 kg, above every cup;
+    # its lightest variant, the bare 0.8 mm skin, 1240 x 0.96 m^2 x 0.0008 m = 0.952 kg, is kept.
+    path = tmp_path / "big.stl"
+    trimesh.creation.box(extents=(0.4, 0.4, 0.4)).export(path)
+    record = import_mesh(path, set_name="custom", name="big", root=tmp_path / "objs")
+    assert record.mass == pytest.approx(1240 * 0.96 * 0.0008, rel=1e-3)
+    (warning,) = record.params["warnings"]
+    assert "0.952 kg is above the default cup's mass cap of 0.411 kg" in warning and "paper (12.9 kg)" in warning
+    assert ObjectRecord.load(record.directory).params["warnings"] == [warning]
+    given = import_mesh(path, set_name="custom", name="given", mass=20.0, root=tmp_path / "objs")
+    assert given.mass == pytest.approx(20.0) and "no cup preset carries it" in given.params["warnings"][0]
 
 
 def test_large_print_falls_back_to_a_lower_infill(tmp_path):

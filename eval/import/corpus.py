@@ -114,9 +114,9 @@ def run_one(name: str, path: Path, options: dict, root: Path, timeout: float) ->
         done = subprocess.run(args, capture_output=True, text=True, timeout=timeout)
         line = json.loads(done.stdout.strip().splitlines()[-1]) if done.stdout.strip() else {}
         ok, error = bool(line.get("ok")), line.get("error") or (None if line else done.stderr.strip()[-300:])
-        repairs, faces = line.get("repairs", []), line.get("faces")
+        repairs, faces, warnings = line.get("repairs", []), line.get("faces"), line.get("warnings", [])
     except subprocess.TimeoutExpired:
-        ok, error, repairs, faces = False, f"timed out after {timeout:g} s", [], None
+        ok, error, repairs, faces, warnings = False, f"timed out after {timeout:g} s", [], None, []
     seconds = time.perf_counter() - start
     return {
         "name": name,
@@ -126,6 +126,7 @@ def run_one(name: str, path: Path, options: dict, root: Path, timeout: float) ->
         "faces": faces,
         "error": error,
         "repairs": repairs,
+        "warnings": warnings,
     }
 
 

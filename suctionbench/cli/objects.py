@@ -148,7 +148,8 @@ def objects_import(
     name: Annotated[str, typer.Option(help="Object name (lower case, digits, _ and -).")] = "",
     units: UnitsOpt = "auto",
     scale: Annotated[float, typer.Option(help="Extra scale factor on top of --units (e.g. a URDF mesh scale).")] = 1.0,
-    mass: Annotated[float | None, typer.Option(help="Mass in kg, at most the mass cap (default: a PLA print).")] = None,
+    mass: Annotated[float | None, typer.Option(
+        help="Mass in kg (default: a PLA print); above the cup's mass cap it imports with a warning.")] = None,
     repair: Annotated[
         bool, typer.Option(help="Repair duplicated faces, touching or overlapping pieces, small holes, stray sheets.")
     ] = True,
@@ -175,15 +176,18 @@ def objects_import(
         )
         row = record_row(record)
         repairs = record.params.get("repairs", [])
+        warnings = record.params.get("warnings", [])
         if not as_json:
             print_rows("imported", [row])
             for note in repairs:
                 err.print(f"repaired: {note}", highlight=False)
+            for note in warnings:
+                err.print(f"warning: {note}", highlight=False)
         if units.lower() == "auto" and record.units != "m" and not as_json:
             err.print(f"read in {record.units}: its size is plausible only in {record.units} (--units auto)",
                       highlight=False)
         return {**row, "directory": str(record.directory), "units": record.units, "scale": record.scale,
-                "repairs": repairs}
+                "repairs": repairs, "warnings": warnings}
 
     run_command(as_json, body, output=f"--root '{root}'" if root is not None else "the user object root")
 

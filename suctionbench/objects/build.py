@@ -28,7 +28,14 @@ from suctionbench.errors import InputError
 from suctionbench.geometry.mesh import mesh_scale, validate_mesh
 from suctionbench.io import WRITE_ERRNOS, os_error_reason, publish_dir, staging_dir
 from suctionbench.objects.decompose import CoacdFailed, CoacdRun
-from suctionbench.objects.mass import MassModel, MassProperties, mass_properties, over_cap_message, resolve_mass
+from suctionbench.objects.mass import (
+    MassModel,
+    MassProperties,
+    above_cap_warning,
+    mass_properties,
+    over_cap_message,
+    resolve_mass,
+)
 from suctionbench.objects.ownership import check_replaceable_objects
 from suctionbench.objects.spec import ObjectSpec
 
@@ -37,8 +44,9 @@ MAX_FACES = 6000
 
 MASS_CAP = CUP_DEFAULT.mass_cap_kg
 """Heaviest object (kg) the default cup carries: V / (S (g + a_peak)) = 0.411 kg (CupConfig.mass_cap_kg,
-objects.mass.mass_cap). Building an object above it is an InputError; objects whose real item is
-heavier are modelled as its lighter real variant (see each object's description)."""
+objects.mass.mass_cap). Building a set's object above it is an InputError (objects whose real item
+is heavier are modelled as its lighter real variant: see each object's description); an imported
+one is kept with a warning (`object_mass`)."""
 
 MIN_MASS = 0.005
 """Lightest object mass (kg), so that no simulated object is a feather: a lighter mass model (a tiny
@@ -250,6 +258,7 @@ def build_object(
     coacd_parallel: int = 1,
     reuse_parts: bool = False,
     cavities: trimesh.Trimesh | None = None,
+    above_cap: str = "error",
 ) -> ObjectRecord:
     """Build an object directory at `out_dir` (replaced atomically) and return its record.
 
@@ -266,12 +275,16 @@ def build_object(
     that changes only masses; CoACD is deterministic, so a full rebuild gives the same parts).
     `cavities`: sealed cavities inside the mesh, facing inwards (`objects.repair.Solid.cavities`): the
     mass, centre of mass and inertia are the material's (mesh and cavities together), the volume and
-    density the material's; surface, stable poses' hull and convex parts are the mesh's."""
+    density the material's; surface, stable poses' hull and convex parts are the mesh's.
+    `above_cap`: what a mass above the default cup's cap does (`object_mass`); a kept one is named in
+    ``params["warnings"]``."""
     out_dir = Path(out_dir)
     check_replaceable_objects([out_dir])  # before the work: minutes of CoACD for nothing otherwise
     mesh = prepare_mesh(mesh, source=source if source != "generated" else spec.name)
     material = mesh if cavities is None else trimesh.util.concatenate([mesh, cavities])
-    model, props = object_mass(material, spec, mass)
+    model, props = object_mass(material, spec, mass, above_cap=above_cap)
+    if props.mass > MASS_CAP:
+        spec.params["warnings"] = [*spec.params.get("warnings", []), above_cap_warning(props.mass)]
     density = props.mass / float(material.volume)
     record = ObjectRecord(
         name=spec.name,
@@ -326,18 +339,23 @@ def _reusable_parts(out_dir: Path, geometry: str) -> tuple[list[bytes], dict[str
         return None
 
 
-def object_mass(mesh: trimesh.Trimesh, spec: ObjectSpec, mass: float | None = None) -> tuple[MassModel, MassProperties]:
+def object_mass(mesh: trimesh.Trimesh, spec: ObjectSpec, mass: float | None = None, *, above_cap: str = "error"
+                ) -> tuple[MassModel, MassProperties]:
     """The mass model an object is built with and its mass properties: a given `mass` (kg) spread
-    uniformly, else the spec's model (objects.mass) or the lightest of its variants under the cap.
-    InputError above the cap (MASS_CAP); a model lighter than MIN_MASS is scaled up to it."""
+    uniformly, else the spec's model (objects.mass) or the first of its lighter variants under the
+    cap (MASS_CAP). Above the cap: InputError (`above_cap` "error": the object sets, whose objects
+    the default cup must be able to carry), or kept ("keep": imports; a given mass as given, else
+    the lightest variant; `build_object` records the warning). A model lighter than MIN_MASS is
+    scaled up to it."""
     if mass is not None:
         if not (isinstance(mass, int | float) and np.isfinite(mass) and mass > 0):
             raise InputError(f"mass {mass!r}: must be a positive number of kilograms")
-        if mass > MASS_CAP:
+        if mass > MASS_CAP and above_cap == "error":
             raise InputError(over_cap_message(spec.name, float(mass)))
         model = MassModel("given with the object (--mass), spread uniformly", density=float(mass) / float(mesh.volume))
         return model, mass_properties(mesh, model)
-    model, props = resolve_mass(mesh, spec.mass_model(), spec.name, spec.params)
+    model, props = resolve_mass(mesh, spec.mass_model(), spec.name, spec.params,
+                                above_cap="error" if above_cap == "error" else "lightest")
     if props.mass < MIN_MASS:
         factor = MIN_MASS / props.mass
         note = f"; {props.mass * 1000:.2g} g raised to the {MIN_MASS * 1000:g} g floor of simulated objects"

@@ -56,7 +56,10 @@ def import_mesh(
     closed solid (`suctionbench.objects.repair.solidify`: seams merged, duplicated faces removed,
     touching or overlapping pieces united, small holes closed, stray open sheets dropped), then
     built (mass, stable poses, convex parts). What was repaired is kept in the record's
-    ``params["repairs"]``. With ``try_repair=False`` a mesh that needs any repair beyond merging
+    ``params["repairs"]``. An object heavier than the default cup carries is imported all the same
+    (a lighter print variant where one fits, else the lightest; a given `mass` as given), named in
+    ``params["warnings"]``: other cups carry more, and an unliftable object is a fair test. With
+    ``try_repair=False`` a mesh that needs any repair beyond merging
     seams is rejected instead. `coacd_parallel`: the convex decomposition's tries run at once
     (`build.decompose_mesh`; None: one per core this process may use, as the user waits).
     """
@@ -78,4 +81,5 @@ def import_mesh(
         coacd=(IMPORT_SCHEDULE, IMPORT_OPTIONS),
         coacd_parallel=coacd_parallel or len(os.sched_getaffinity(0)),
         cavities=solid.cavities,
+        above_cap="keep",
     )

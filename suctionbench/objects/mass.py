@@ -345,18 +345,34 @@ def mass_cap(cup: CupConfig = CUP_DEFAULT) -> dict[str, Any]:
 
 def resolve_mass(
     mesh: trimesh.Trimesh, model: MassModel, name: str, params: dict[str, Any] | None = None,
-    cup: CupConfig = CUP_DEFAULT,
+    cup: CupConfig = CUP_DEFAULT, *, above_cap: str = "error",
 ) -> tuple[MassModel, MassProperties]:
     """The first of `model` and its lighter variants that weighs no more than the cup's mass cap,
-    with its mass properties; InputError if none does."""
+    with its mass properties. If none does: InputError (`above_cap` "error"), or the lightest
+    variant ("lightest": the object is kept, heavier than that cup carries)."""
     tried = []
     for candidate in variants(model):
         props = mass_properties(mesh, candidate, params)
         if props.mass <= cup.mass_cap_kg:
             return candidate, props
-        tried.append(props.mass)
-    lightest = f" (its lightest variant {min(tried):.3f} kg)" if len(tried) > 1 else ""
-    raise InputError(over_cap_message(name, tried[0], cup, lightest))
+        tried.append((props.mass, candidate, props))
+    if above_cap == "lightest":
+        _, candidate, props = min(tried, key=lambda t: t[0])
+        return candidate, props
+    lightest = f" (its lightest variant {min(t[0] for t in tried):.3f} kg)" if len(tried) > 1 else ""
+    raise InputError(over_cap_message(name, tried[0][0], cup, lightest))
+
+
+def above_cap_warning(mass: float) -> str:
+    """What an object of `mass` kg, above the default cup's mass cap, is told: which cup presets
+    (`config.CUP_PRESETS`) carry it, if any."""
+    from suctionbench.config import CUP_PRESETS
+
+    carriers = [f"{k} ({c.mass_cap_kg:.3g} kg)" for k, c in CUP_PRESETS.items() if c.mass_cap_kg >= mass]
+    cups = f"the cups that do: {', '.join(carriers)}" if carriers else "no cup preset carries it"
+    return (f"{mass:.3f} kg is above the default cup's mass cap of {CUP_DEFAULT.mass_cap_kg:.3f} kg "
+            f"({mass_cap(CUP_DEFAULT)['derivation']}): no grasp of that cup holds it ({cups}); give "
+            "--mass if the real item is lighter")
 
 
 def variants(model: MassModel) -> list[MassModel]:

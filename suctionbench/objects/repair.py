@@ -26,7 +26,8 @@ undoes the usual disguises, in this order, and says what it did:
    manifold3d; overlap would otherwise be counted twice in the volume. Pieces left apart by a gap
    of at most GAP_MAX of the object (V-HACD decompositions and CAD assemblies leave micrometres)
    are snapped across it and united; sealed voids the union encloses between overlapping pieces
-   are filled up to LOOSE_MAX of the volume (more is a hollow object, rejected); loose crumbs of at
+   are filled up to LOOSE_MAX of the volume (more is kept hollow, as the pieces leave it, like a
+   cavity modelled facing inwards); loose crumbs of at
    most LOOSE_MAX of the volume are dropped; anything else apart is a second object, rejected with
    the distance to it.
 7. *Cracks.* Render meshes are often patches that do not meet (cracks and T-junctions between
@@ -359,7 +360,7 @@ def solidify(mesh: trimesh.Trimesh, source: str, rebuild: bool = True) -> Solid:
     solid = Solid(unpinch(closed[0]), notes) if len(closed) == 1 else _unite(closed, notes, tag)
     if cavities:
         hollow = -sum(_volume(c) for c in cavities)
-        solid.cavities = trimesh.util.concatenate(cavities) if len(cavities) > 1 else cavities[0]
+        solid.cavities = trimesh.util.concatenate(cavities if solid.cavities is None else [solid.cavities, *cavities])
         solid.notes.append(
             f"{_count(len(cavities), 'sealed cavity', 'sealed cavities')} modelled inside "
             f"({hollow / _volume(solid.mesh):.2%} of the volume within the outer surface): kept hollow, "
@@ -483,23 +484,26 @@ def _union(bodies: list[trimesh.Trimesh], tag: str) -> trimesh.Trimesh:
         ) from None
 
 
-def _fill_voids(piece: trimesh.Trimesh, notes: list[str], tag: str) -> trimesh.Trimesh:
-    """`piece` without the sealed inner voids that uniting overlapping pieces can enclose, where they hold
-    at most LOOSE_MAX of its volume (they were solid in each piece); larger ones are an InputError."""
+def _fill_voids(piece: trimesh.Trimesh, notes: list[str]) -> tuple[trimesh.Trimesh, trimesh.Trimesh | None]:
+    """(`piece`'s outer surface, the sealed voids inside it kept hollow or None). Uniting overlapping
+    pieces can enclose voids no piece covers: up to LOOSE_MAX of the volume they are filled
+    (slivers of numerical union, or gaps the pieces were meant to close); larger ones are what the
+    pieces describe, space no piece holds, and are kept hollow as cavities (`Solid.cavities`):
+    the mass leaves them out, the surface is the outer one."""
     parts = piece.split(only_watertight=False)
     if len(parts) == 1:
-        return piece
+        return piece, None
     outer = max(parts, key=_volume)
-    voids = -sum(_volume(p) for p in parts if p is not outer)
-    share = voids / _volume(outer)
-    if share > LOOSE_MAX:
-        raise InputError(
-            f"{tag}: hollow: {_count(len(parts) - 1, 'sealed inner cavity', 'sealed inner cavities')} of "
-            f"{share:.1%} of its volume between overlapping pieces (hollow, or gaps between the pieces of a "
-            "solid: fill it, or write it as a closed surface facing inwards to keep it hollow)"
-        )
-    notes.append(f"{_count(len(parts) - 1, 'sealed void')} between united pieces filled ({share:.2%} of the volume)")
-    return outer
+    voids = [p for p in parts if p is not outer]
+    share = -sum(_volume(p) for p in voids) / _volume(outer)
+    if share <= LOOSE_MAX:
+        notes.append(f"{_count(len(voids), 'sealed void')} between united pieces filled ({share:.2%} of the volume)")
+        return outer, None
+    notes.append(
+        f"{_count(len(voids), 'sealed void')} between united pieces ({share:.1%} of the volume within the outer "
+        "surface): kept hollow, as the pieces leave them (no material there in the mass; give --mass if the "
+        "object is solid there)")
+    return outer, trimesh.util.concatenate(voids) if len(voids) > 1 else voids[0]
 
 
 def _unite(closed: list[trimesh.Trimesh], notes: list[str], tag: str) -> Solid:
@@ -547,7 +551,7 @@ def _unite(closed: list[trimesh.Trimesh], notes: list[str], tag: str) -> Solid:
                 f"{apart:.3g} mm apart), expected one"
             )
         pieces = pieces[:1]
-    united = _fill_voids(pieces[0], notes, tag)
+    united, voids = _fill_voids(pieces[0], notes)
     if gaps:
         notes.append(
             f"{_count(len(gaps), 'gap')} of up to {max(gaps) * 1000:.2g} mm between pieces closed "
@@ -566,7 +570,7 @@ def _unite(closed: list[trimesh.Trimesh], notes: list[str], tag: str) -> Solid:
             f"{_count(len(loose), 'loose piece')} dropped ({dropped / (_volume(united) + dropped):.2%} "
             f"of the volume, apart from the body: crumbs, not part of the object)"
         )
-    return Solid(unpinch(united), notes)
+    return Solid(unpinch(united), notes, voids)
 
 
 def _count(n: int | list | None, singular: str, plural: str | None = None) -> str:

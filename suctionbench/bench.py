@@ -410,7 +410,7 @@ def _write_timing_dataset(directory, datapoints: int, seed: int) -> None:
         k = min(per_shard, datapoints - start)
         slope = rng.uniform(-0.6, 0.6, (2, k, 1, 1)).astype(np.float32) * 0.001  # m per pixel at 1 mm/px
         depth = rng.uniform(0.55, 0.65, (k, 1, 1)).astype(np.float32)
-        plane = depth + slope[0] * xx + slope[1] * yy
+        plane = (depth + slope[0] * xx + slope[1] * yy)[..., None]  # (k, 32, 32, 1), as generate stores
         metric = rng.uniform(0, 1, k).astype(np.float32)
         fields = {
             "depth_ims_tf_table": plane + rng.normal(0, 0.001, plane.shape).astype(np.float32),
@@ -421,8 +421,6 @@ def _write_timing_dataset(directory, datapoints: int, seed: int) -> None:
             "image_labels": (np.arange(start, start + k) // 10).astype(np.int32),
             "pose_labels": np.zeros(k, np.int32), "grasp_labels": np.arange(k, dtype=np.int32) % 10,
         }
-        fields["depth_ims_tf_table"] = fields["depth_ims_tf_table"][..., None]
-        fields["context_ims_tf_table"] = fields["context_ims_tf_table"][..., None]
         for name in ("hand_poses", "object_context"):
             spec = FIELDS[name]
             fields[name] = rng.uniform(0, 1, (k, *spec.shape)).astype(spec.dtype)

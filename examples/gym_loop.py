@@ -2,7 +2,7 @@
 
     .venv/bin/python examples/gym_loop.py --episodes 5 --seed 0
 
-The environment `suctionbench/SuctionPick-v3` shows an overhead depth image with the object's
+The environment `suctionbench/SuctionPick-v4` shows an overhead depth image with the object's
 mask; one step is one grasp: a point and an approach direction in the camera frame (OpenCV: x
 right, y down, z along the optical axis). Reward 1 for a successful pick, else 0.
 """
@@ -12,7 +12,7 @@ import argparse
 import gymnasium
 import numpy as np
 
-import suctionbench  # noqa: F401  (registers suctionbench/SuctionPick-v3)
+import suctionbench  # noqa: F401  (registers suctionbench/SuctionPick-v4)
 
 
 def middle_straight_down(observation: dict) -> np.ndarray:
@@ -31,7 +31,7 @@ def middle_straight_down(observation: dict) -> np.ndarray:
 
 
 def main(episodes: int = 3, seed: int = 0, object_set: str = "basic") -> float:
-    env = gymnasium.make("suctionbench/SuctionPick-v3", object_set=object_set)
+    env = gymnasium.make("suctionbench/SuctionPick-v4", object_set=object_set)
     successes = 0.0
     for episode in range(episodes):
         observation, info = env.reset(seed=seed + episode)

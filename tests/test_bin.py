@@ -1,5 +1,5 @@
 """Bin picking in clutter (suctionbench.clutter): bin tasks, depth segmentation, the cup's path
-check, filling the bin, the bin benchmark from the CLI, and the SuctionBin-v3 environment."""
+check, filling the bin, the bin benchmark from the CLI, and the SuctionBin-v4 environment."""
 
 from __future__ import annotations
 
@@ -217,7 +217,7 @@ def test_bin_eval_rejects_bad_masks_and_writes_nothing(tmp_path):
 
 # -- the environment --------------------------------------------------------------------------------
 def test_bin_env_passes_gymnasium_checker_and_is_seeded():
-    env = gymnasium.make("suctionbench/SuctionBin-v3", task="bin-smoke")
+    env = gymnasium.make("suctionbench/SuctionBin-v4", task="bin-smoke")
     with pytest.warns(UserWarning):  # the checker's advice on unbounded boxes; not errors
         check_env(env.unwrapped, skip_render_check=True)
     a, info_a = env.reset(seed=5)
@@ -228,7 +228,7 @@ def test_bin_env_passes_gymnasium_checker_and_is_seeded():
 
 
 def test_bin_env_invalid_action_costs_an_attempt_and_moves_nothing():
-    env = gymnasium.make("suctionbench/SuctionBin-v3", task="bin-smoke")
+    env = gymnasium.make("suctionbench/SuctionBin-v4", task="bin-smoke")
     obs, _ = env.reset(seed=1, options={"trial": 0})
     after, reward, terminated, truncated, info = env.step(np.zeros(6, dtype=np.float32))
     assert reward == 0.0 and info["failure"] == "invalid_action" and info["failures_in_row"] == 1

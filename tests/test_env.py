@@ -1,4 +1,4 @@
-"""The gymnasium environment suctionbench/SuctionPick-v3: registration, gymnasium's own checker,
+"""The gymnasium environment suctionbench/SuctionPick-v4: registration, gymnasium's own checker,
 determinism, a sensible top-down pick, invalid actions and repeated attempts."""
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from gymnasium.utils.env_checker import check_env
 import suctionbench  # noqa: F401  (registers the environments)
 from suctionbench.errors import InputError
 
-ENV_ID = "suctionbench/SuctionPick-v3"
+ENV_ID = "suctionbench/SuctionPick-v4"
 BOX = {"object": "basic/box_tea"}  # 14 x 7 x 7 cm box: a flat face up however it lands
 INFO_KEYS = {
     "object", "attempt", "success", "valid", "failure", "detail", "label_seal", "label_seal_failure", "label_wr",
@@ -175,10 +175,11 @@ def test_scene_unstable_after_an_attempt_ends_the_episode_with_the_last_image(mo
         env.close()
 
 
-@pytest.mark.parametrize("old", ["v0", "v1", "v2"])
+@pytest.mark.parametrize("old", ["v0", "v1", "v2", "v3"])
 def test_the_previous_physics_versions_are_refused_with_the_current_id(old):
     # v0's vacuum was shared among the probe's contacts, v1's lip sealed over concavities the convex parts span, v2's
-    # liquids stayed where they were filled upright; their results are not comparable with v3's.
-    with pytest.raises(gymnasium.error.DeprecatedEnv, match="v3"), warnings.catch_warnings():
+    # liquids stayed where they were filled upright, v3's levelled cans kept their inertial frame unturned in the
+    # kinematics; their results are not comparable with v4's.
+    with pytest.raises(gymnasium.error.DeprecatedEnv, match="v4"), warnings.catch_warnings():
         warnings.simplefilter("ignore", DeprecationWarning)  # gymnasium warns as well as raising
         gymnasium.make(f"suctionbench/SuctionPick-{old}")

@@ -68,7 +68,7 @@ def test_gym_loop_policy_aims_at_the_object_straight_down():
     import gymnasium
 
     loop = _module("gym_loop")
-    env = gymnasium.make("suctionbench/SuctionPick-v3", object_set="basic")
+    env = gymnasium.make("suctionbench/SuctionPick-v4", object_set="basic")
     try:
         observation, _ = env.reset(seed=5)
         action = loop.middle_straight_down(observation)

@@ -169,3 +169,42 @@ def test_a_levelled_body_collides_with_all_its_parts():
     for part in runner.record.part_meshes():
         local = (np.asarray(part.vertices) - m.body_ipos[body]) @ frame
         assert np.all(np.abs(local - root[:3]) <= root[3:] + 1e-6)
+
+
+def test_levelling_a_body_built_with_an_unrotated_inertial_frame_rotates_it_in_the_kinematics():
+    # A can built upright has its principal axes along its own: the compiler marks its inertial
+    # frame as unrotated (body_sameframe) and MuJoCo's kinematics then takes the body's rotation
+    # for the inertial frame's. Lying, the levelled liquid turns the principal axes; left marked,
+    # the inertia acted about the wrong axes and the bounding boxes (kept in the inertial frame)
+    # sat turned about the can's axis: parts up to 17 mm outside them, missed contacts, and bins
+    # that ended in a deep interpenetration while filling. After levelling, the kinematics' inertial
+    # frame must be the body's rotation times the levelled iquat, and it must bound every part.
+    from suctionbench.clutter.episode import BinEpisode
+    from suctionbench.clutter.scene import build_bin_scene
+    from suctionbench.config import CUP_DEFAULT
+    from suctionbench.sensing.camera import resolve_camera
+    from suctionbench.sim.liquids import CORNERS, rotation_matrix
+
+    record = load_object("basic/cylinder_can")
+    episode = BinEpisode(build_bin_scene([record], CUP_DEFAULT, resolve_camera("primesense"), np.eye(4)))
+    m, d = episode.model, episode.data
+    (can,) = episode.bodies
+    built = int(m.body_sameframe[can])
+    assert built != mujoco.mjtSameFrame.mjSAMEFRAME_NONE  # as built: the case this test is about
+    qpos = m.jnt_qposadr[m.body_jntadr[can]]
+    d.qpos[qpos + 3: qpos + 7] = [np.cos(np.pi / 4), np.sin(np.pi / 4), 0.0, 0.0]  # lying: axis along y
+    mujoco.mj_forward(m, d)
+    assert episode.liquids.level(d, [can]) > 0.005  # the liquid moved towards the side below
+    assert abs(abs(m.body_iquat[can][0]) - 1.0) > 1e-3  # and turned the principal axes
+    mujoco.mj_kinematics(m, d)
+    body_turn = d.xmat[can].reshape(3, 3)
+    np.testing.assert_allclose(d.ximat[can].reshape(3, 3), body_turn @ rotation_matrix(m.body_iquat[can]), atol=1e-9)
+    root = m.bvh_aabb[m.body_bvhadr[can]]
+    frame, origin = d.ximat[can].reshape(3, 3), d.xipos[can]
+    for g in range(m.body_geomadr[can], m.body_geomadr[can] + m.body_geomnum[can]):
+        box = m.geom_aabb[g]
+        world = d.geom_xpos[g] + (box[:3] + box[3:] * CORNERS) @ d.geom_xmat[g].reshape(3, 3).T
+        local = (world - origin) @ frame
+        assert np.all(np.abs(local - root[:3]) <= root[3:] + 1e-9), g
+    episode.liquids.restore()
+    assert m.body_sameframe[can] == built

@@ -8,11 +8,13 @@ results reported against an id stay comparable. v1 (2026-11-26): the simulated v
 the cup's axis however an object's collision geometry is decomposed; v2 (2026-11-26): the leak test
 measures the object's real surface behind its convex parts (eval/README.md); v3 (2026-11-27): a
 part-filled container's liquid levels in the pose the object rests in (`objects.liquid`), where it
-stayed in the end that was its bottom when upright. Making an older id raises gymnasium's
-DeprecatedEnv, naming the ``-v3`` to use.
+stayed in the end that was its bottom when upright; v4 (2026-11-27): levelling turns the
+inertial frame of a body built with an unrotated one (an upright can) in the kinematics too, so
+its inertia and collision bounding boxes follow the levelled liquid (v3 left them turned: parts
+missed contacts). Making an older id raises gymnasium's DeprecatedEnv, naming the ``-v4`` to use.
 
     >>> import gymnasium, suctionbench
-    >>> env = gymnasium.make("suctionbench/SuctionPick-v3", object_set="basic")
+    >>> env = gymnasium.make("suctionbench/SuctionPick-v4", object_set="basic")
 """
 
 from __future__ import annotations
@@ -22,8 +24,8 @@ from typing import Any
 import gymnasium
 
 ENVIRONMENTS: dict[str, str] = {
-    "suctionbench/SuctionPick-v3": "suctionbench.envs.suction_pick:SuctionPickEnv",
-    "suctionbench/SuctionBin-v3": "suctionbench.envs.suction_bin:SuctionBinEnv",
+    "suctionbench/SuctionPick-v4": "suctionbench.envs.suction_pick:SuctionPickEnv",
+    "suctionbench/SuctionBin-v4": "suctionbench.envs.suction_bin:SuctionBinEnv",
 }
 """Environment id -> entry point ("module:Class"), imported only by gymnasium.make."""
 

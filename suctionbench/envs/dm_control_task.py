@@ -7,7 +7,7 @@
     ((480, 640), (6,))
     >>> timestep = env.step(action)                       # one grasp attempt
 
-It is the same task as the gymnasium environment ``suctionbench/SuctionPick-v3``
+It is the same task as the gymnasium environment ``suctionbench/SuctionPick-v4``
 (`suctionbench.envs.suction_pick.SuctionPickEnv`) and runs the same episode code: `SuctionPickTask`
 drives a `SuctionPickEnv` (which drives `suctionbench.sim.pick.PickRunner` and
 `suctionbench.sim.episode.PickEpisode`), so an object, placement, observation, grasp execution,
@@ -40,7 +40,7 @@ dm_control mapping
   info (failure reason, analytic labels, phases, ...) plus ``object_position``, the object's
   position after the attempt (named ``xpos``).
 
-Arguments of `load` are those of ``gymnasium.make("suctionbench/SuctionPick-v3", ...)`` (object_set,
+Arguments of `load` are those of ``gymnasium.make("suctionbench/SuctionPick-v4", ...)`` (object_set,
 cup, camera, max_attempts, camera_seed, observation_noise), ``random`` (an int seed or a
 ``numpy.random.RandomState``) for the episodes' seeds, and ``object`` ("SET/NAME") to pick that
 object in every episode (the gymnasium ``reset(options={"object": ...})``).

@@ -1,4 +1,4 @@
-"""`suctionbench/SuctionBin-v3`: picking a cluttered bin clear, one grasp attempt per step.
+"""`suctionbench/SuctionBin-v4`: picking a cluttered bin clear, one grasp attempt per step.
 
 A thin layer over `suctionbench.clutter.runner.BinRunner` (the runner fills the bin, renders,
 labels and executes; the benchmark's `eval --task bin-*` runs the same code with a policy in the
@@ -46,7 +46,7 @@ class SuctionBinEnv(gymnasium.Env):
 
     ## Action space
 
-    The same as `SuctionPick-v3`: `Box(low=[-1, -1, 0, -1, -1, -1], high=[1, 1, 2, 1, 1, 1],
+    The same as `SuctionPick-v4`: `Box(low=[-1, -1, 0, -1, -1, -1], high=[1, 1, 2, 1, 1, 1],
     (6,), float32)`, a grasp point (metres) and an approach direction (from the cup into the
     surface), both in the camera's OpenCV optical frame. A zero or non-finite approach is not
     executed: reward 0, `info["failure"] == "invalid_action"`, and it counts as a failed attempt.
@@ -93,7 +93,7 @@ class SuctionBinEnv(gymnasium.Env):
 
     ```python
     gymnasium.make(
-        "suctionbench/SuctionBin-v3",
+        "suctionbench/SuctionBin-v4",
         task="bin-basic",        # bin-smoke, bin-basic, bin-typical, bin-mixed, or a bin-task TOML
         cup="default",           # cup preset, shared by the simulated cup and the labels
         camera="primesense",     # camera preset or intrinsics TOML
@@ -120,6 +120,10 @@ class SuctionBinEnv(gymnasium.Env):
     - v3 (2026-11-27): a part-filled container's liquid (water, milk, shampoo, a can's soft drink)
       levels in the pose the object comes to rest in, moving its centre of mass (a lying bottle's
       to the middle of its length); the analytic labels use the same centre of mass.
+    - v4 (2026-11-27): a levelled body built with an unrotated inertial frame (an upright can, a
+      jug) has its inertial frame turned in the kinematics too; in v3 its inertia acted about the
+      built axes and its collision bounding boxes sat turned, so parts missed contacts (a lying
+      can's up to 17 mm; bins that ended in a deep interpenetration while filling).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 1}

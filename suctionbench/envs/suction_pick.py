@@ -1,4 +1,4 @@
-"""`suctionbench/SuctionPick-v3`: the benchmark's simulated pick as a gymnasium environment.
+"""`suctionbench/SuctionPick-v4`: the benchmark's simulated pick as a gymnasium environment.
 
 The environment is a thin layer over `suctionbench.sim.pick.PickRunner`: the runner builds the
 scene, places the object, renders the observation and executes the pick; this module only maps
@@ -159,7 +159,7 @@ class SuctionPickEnv(gymnasium.Env):
 
     ```python
     gymnasium.make(
-        "suctionbench/SuctionPick-v3",
+        "suctionbench/SuctionPick-v4",
         object_set="basic",         # basic, typical, adversarial, or a user set (suctionbench objects list)
         cup="default",              # cup preset (suctionbench.config.CUP_PRESETS), shared by sim and label
         camera="primesense",        # camera preset or intrinsics TOML file; sets H, W of the images
@@ -187,6 +187,10 @@ class SuctionPickEnv(gymnasium.Env):
     - v3 (2026-11-27): a part-filled container's liquid (water, milk, shampoo, a can's soft drink)
       levels in the pose the object comes to rest in, moving its centre of mass (a lying bottle's
       to the middle of its length); the analytic labels use the same centre of mass.
+    - v4 (2026-11-27): a levelled body built with an unrotated inertial frame (an upright can, a
+      jug) has its inertial frame turned in the kinematics too; in v3 its inertia acted about the
+      built axes and its collision bounding boxes sat turned, so parts missed contacts (a lying
+      can's up to 17 mm; bins that ended in a deep interpenetration while filling).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 1}

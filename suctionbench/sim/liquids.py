@@ -57,6 +57,7 @@ class LiquidBodies:
         self.liquids = liquids
         self._built = {b: (model.body_ipos[b].copy(), model.body_iquat[b].copy(), model.body_inertia[b].copy())
                        for b in liquids}
+        self._built_sameframe = {b: int(model.body_sameframe[b]) for b in liquids}
         self._bvh = {b: slice(int(model.body_bvhadr[b]), int(model.body_bvhadr[b] + model.body_bvhnum[b]))
                      for b in liquids}
         self._built_bvh = {b: model.bvh_aabb[nodes].copy() for b, nodes in self._bvh.items()}
@@ -76,6 +77,11 @@ class LiquidBodies:
             moved = max(moved, float(np.linalg.norm(props.com - m.body_ipos[b])))
             m.body_ipos[b] = props.com
             m.body_inertia[b], m.body_iquat[b] = principal_axes(props.inertia)
+            # The compiler marks a body whose inertial frame is its own frame, or has its
+            # orientation (an upright can), and kinematics then skips the inertial frame's
+            # rotation: left so, the levelled inertia acts about the wrong axes and the bounding
+            # boxes below are placed by the wrong frame (a lying can's parts 17 mm outside them).
+            m.body_sameframe[b] = mujoco.mjtSameFrame.mjSAMEFRAME_NONE
             self._move_bounding_boxes(b)
             levelled = self._changed = True
         if levelled:
@@ -89,6 +95,7 @@ class LiquidBodies:
         for b, (ipos, iquat, inertia) in self._built.items():
             self.model.body_ipos[b], self.model.body_iquat[b], self.model.body_inertia[b] = ipos, iquat, inertia
             self.model.bvh_aabb[self._bvh[b]] = self._built_bvh[b]
+            self.model.body_sameframe[b] = self._built_sameframe[b]
         self._set_constants()
         self._changed = False
 

@@ -7,14 +7,15 @@
 #   1. `pytest -m gpu`: the bfloat16 CUDA training path (tests/test_learning.py); `suctionbench
 #      bench train`: training images/s on the GPU against the machine's CPU (batch 64 and 1024).
 #   2. The 1,500-object training corpus (seed 0, as the shipped model's), a rate probe on its first
-#      32 objects (on 1 worker, the scaling reference, and on WORKERS), then `generate` with as many datapoints as the probe's rate fills GEN_S seconds
-#      with (a multiple of DP_STEP, within DP_MIN-1,200,000), assembled on every core.
+#      32 objects (on 1 worker, the scaling reference, and on WORKERS), then `generate` with as many
+#      datapoints as the probe's rate fills GEN_S seconds with (a multiple of DP_STEP, within
+#      DP_MIN-1,200,000), assembled on every core. SKIP_CHECKS=1 skips step 1.
 #   3. ARCHS trained at once on the GPU, each one epoch at a time until the deadline
 #      (eval/gqcnn/train_until.py: soft target, weights' average 0.9995, object-wise split).
 #   4. Held-out accuracy and AP of the shipped default and of each trained model on the dataset's
 #      object-wise validation split (eval/bin/heldout.py).
-# OUT gets log.txt, bench_train.jsonl, heldout.jsonl, dataset_card.json, and per arch <arch>.json (its model card); the
-# first arch's weights too (<arch>.safetensors): 8 files, what a lease returns at most.
+# OUT gets log.txt, bench_train.jsonl, heldout.jsonl, dataset_card.json, and per arch <arch>.json
+# (its model card); the first arch's weights too (<arch>.safetensors): 8 files, what a lease returns.
 # A lent machine has torch but not the project's other dependencies, and no network: run
 # eval/gqcnn/gpu_wheels.sh here first (wheels and EGL loaders into .whl/ and .gl/, carried), then
 # there `source eval/gqcnn/gpu_setup.sh` before this script.
@@ -35,14 +36,15 @@ mkdir -p "$OUT" "$WORK"
 exec > >(tee -a "$OUT/log.txt") 2>&1
 log() { echo "[$(( $(date +%s) - T0 )) s] $*"; }
 
-[ -n "${SKIP_CHECKS:-}" ] || {
-log "1. CUDA tests"
-timeout 150 $PY -m pytest -q -p no:cacheprovider -m gpu tests/test_learning.py 2>&1 | tail -n 6
-for batch in 64 1024; do
-  timeout 90 $PY -m suctionbench bench train --archs dn3,context-pose --datapoints 40000 --reference-datapoints 4000 \
-    --batch-size "$batch" --device "$DEVICE" --json | tail -n 1 | tee -a "$OUT/bench_train.jsonl"
-done
-}
+if [ -z "${SKIP_CHECKS:-}" ]; then
+  log "1. CUDA tests"
+  timeout 150 $PY -m pytest -q -p no:cacheprovider -m gpu tests/test_learning.py 2>&1 | tail -n 6
+  for batch in 64 1024; do
+    timeout 90 $PY -m suctionbench bench train --archs dn3,context-pose --datapoints 40000 \
+      --reference-datapoints 4000 --batch-size "$batch" --device "$DEVICE" --json | tail -n 1 \
+      | tee -a "$OUT/bench_train.jsonl"
+  done
+fi
 
 log "2. corpus of $COUNT objects on $WORKERS workers"
 $PY -m suctionbench objects generate --count "$COUNT" --seed 0 --out "$WORK/corpus" --workers "$WORKERS" \

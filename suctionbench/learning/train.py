@@ -332,12 +332,13 @@ def _torch_seed(seq: np.random.SeedSequence) -> int:
 def _device(name: str) -> torch.device:
     """The torch device `name` names: cpu, cuda or cuda:N; InputError for anything else, or for
     cuda where torch sees no GPU."""
+    unknown = InputError(f"device '{name}': expected cpu, cuda or cuda:N")
+    if not (name == "cpu" or name.startswith("cuda")):
+        raise unknown
     try:
-        if not (name == "cpu" or name.startswith("cuda")):
-            raise RuntimeError
         device = torch.device(name)
     except RuntimeError:
-        raise InputError(f"device '{name}': expected cpu, cuda or cuda:N") from None
+        raise unknown from None
     if device.type == "cuda" and not torch.cuda.is_available():
         raise InputError(f"device '{name}': CUDA is not available on this machine (use cpu)")
     return device

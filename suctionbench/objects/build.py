@@ -258,7 +258,7 @@ def build_object(
     coacd_parallel: int = 1,
     reuse_parts: bool = False,
     cavities: trimesh.Trimesh | None = None,
-    above_cap: str = "error",
+    keep_above_cap: bool = False,
 ) -> ObjectRecord:
     """Build an object directory at `out_dir` (replaced atomically) and return its record.
 
@@ -276,21 +276,22 @@ def build_object(
     `cavities`: sealed cavities inside the mesh, facing inwards (`objects.repair.Solid.cavities`): the
     mass, centre of mass and inertia are the material's (mesh and cavities together), the volume and
     density the material's; surface, stable poses' hull and convex parts are the mesh's.
-    `above_cap`: what a mass above the default cup's cap does (`object_mass`); a kept one is named in
-    ``params["warnings"]``."""
+    `keep_above_cap`: keep a mass above the default cup's cap (`object_mass`), named in the record's
+    ``params["warnings"]``, instead of refusing it."""
     out_dir = Path(out_dir)
     check_replaceable_objects([out_dir])  # before the work: minutes of CoACD for nothing otherwise
     mesh = prepare_mesh(mesh, source=source if source != "generated" else spec.name)
     material = mesh if cavities is None else trimesh.util.concatenate([mesh, cavities])
-    model, props = object_mass(material, spec, mass, above_cap=above_cap)
+    model, props = object_mass(material, spec, mass, keep_above_cap=keep_above_cap)
+    params = spec.params
     if props.mass > MASS_CAP:
-        spec.params["warnings"] = [*spec.params.get("warnings", []), above_cap_warning(props.mass)]
+        params = {**params, "warnings": [*params.get("warnings", []), above_cap_warning(props.mass)]}
     density = props.mass / float(material.volume)
     record = ObjectRecord(
         name=spec.name,
         set=spec.set,
         generator=spec.generator,
-        params=spec.params,
+        params=params,
         description=spec.description,
         source=source,
         units=units,
@@ -339,23 +340,22 @@ def _reusable_parts(out_dir: Path, geometry: str) -> tuple[list[bytes], dict[str
         return None
 
 
-def object_mass(mesh: trimesh.Trimesh, spec: ObjectSpec, mass: float | None = None, *, above_cap: str = "error"
-                ) -> tuple[MassModel, MassProperties]:
+def object_mass(mesh: trimesh.Trimesh, spec: ObjectSpec, mass: float | None = None, *,
+                keep_above_cap: bool = False) -> tuple[MassModel, MassProperties]:
     """The mass model an object is built with and its mass properties: a given `mass` (kg) spread
     uniformly, else the spec's model (objects.mass) or the first of its lighter variants under the
-    cap (MASS_CAP). Above the cap: InputError (`above_cap` "error": the object sets, whose objects
-    the default cup must be able to carry), or kept ("keep": imports; a given mass as given, else
-    the lightest variant; `build_object` records the warning). A model lighter than MIN_MASS is
+    cap (MASS_CAP). Above the cap: InputError (the object sets, whose objects the default cup must
+    be able to carry), or with `keep_above_cap` kept (imports: a given mass as given, else the
+    lightest variant; `build_object` records the warning). A model lighter than MIN_MASS is
     scaled up to it."""
     if mass is not None:
         if not (isinstance(mass, int | float) and np.isfinite(mass) and mass > 0):
             raise InputError(f"mass {mass!r}: must be a positive number of kilograms")
-        if mass > MASS_CAP and above_cap == "error":
+        if mass > MASS_CAP and not keep_above_cap:
             raise InputError(over_cap_message(spec.name, float(mass)))
         model = MassModel("given with the object (--mass), spread uniformly", density=float(mass) / float(mesh.volume))
         return model, mass_properties(mesh, model)
-    model, props = resolve_mass(mesh, spec.mass_model(), spec.name, spec.params,
-                                above_cap="error" if above_cap == "error" else "lightest")
+    model, props = resolve_mass(mesh, spec.mass_model(), spec.name, spec.params, keep_above_cap=keep_above_cap)
     if props.mass < MIN_MASS:
         factor = MIN_MASS / props.mass
         note = f"; {props.mass * 1000:.2g} g raised to the {MIN_MASS * 1000:g} g floor of simulated objects"

@@ -81,5 +81,5 @@ def import_mesh(
         coacd=(IMPORT_SCHEDULE, IMPORT_OPTIONS),
         coacd_parallel=coacd_parallel or len(os.sched_getaffinity(0)),
         cavities=solid.cavities,
-        above_cap="keep",
+        keep_above_cap=True,
     )

@@ -345,18 +345,18 @@ def mass_cap(cup: CupConfig = CUP_DEFAULT) -> dict[str, Any]:
 
 def resolve_mass(
     mesh: trimesh.Trimesh, model: MassModel, name: str, params: dict[str, Any] | None = None,
-    cup: CupConfig = CUP_DEFAULT, *, above_cap: str = "error",
+    cup: CupConfig = CUP_DEFAULT, *, keep_above_cap: bool = False,
 ) -> tuple[MassModel, MassProperties]:
     """The first of `model` and its lighter variants that weighs no more than the cup's mass cap,
-    with its mass properties. If none does: InputError (`above_cap` "error"), or the lightest
-    variant ("lightest": the object is kept, heavier than that cup carries)."""
+    with its mass properties. If none does: InputError, or with `keep_above_cap` the lightest
+    variant (the object is kept, heavier than that cup carries)."""
     tried = []
     for candidate in variants(model):
         props = mass_properties(mesh, candidate, params)
         if props.mass <= cup.mass_cap_kg:
             return candidate, props
         tried.append((props.mass, candidate, props))
-    if above_cap == "lightest":
+    if keep_above_cap:
         _, candidate, props = min(tried, key=lambda t: t[0])
         return candidate, props
     lightest = f" (its lightest variant {min(t[0] for t in tried):.3f} kg)" if len(tried) > 1 else ""

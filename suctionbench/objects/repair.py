@@ -503,7 +503,7 @@ def _fill_voids(piece: trimesh.Trimesh, notes: list[str]) -> tuple[trimesh.Trime
         f"{_count(len(voids), 'sealed void')} between united pieces ({share:.1%} of the volume within the outer "
         "surface): kept hollow, as the pieces leave them (no material there in the mass; give --mass if the "
         "object is solid there)")
-    return outer, trimesh.util.concatenate(voids) if len(voids) > 1 else voids[0]
+    return outer, trimesh.util.concatenate(voids)
 
 
 def _unite(closed: list[trimesh.Trimesh], notes: list[str], tag: str) -> Solid:

@@ -326,7 +326,7 @@ def cases(p: dict[str, Path]) -> list[Case]:
     g = ["generate", "--objects", "basic"]
     for opt, v in (("--datapoints", "0"), ("--datapoints", "-1"), ("--datapoints", "100000000000"),
                    ("--grasps-per-object", "0"), ("--grasps-per-object", "100000000"), ("--seed", "-1"),
-                   ("--workers", "-1"), ("--engine", "spark"), ("--load", "dynamic")):
+                   ("--workers", "-1"), ("--engine", "spark"), ("--load", "dynamic"), ("--noise", "kinect")):
         base = {"--datapoints": "4"}
         base[opt] = v
         add("generate", *g, *[x for kv in base.items() for x in kv], "--out", r / f"gen_{opt[2:]}_{v}")
@@ -362,6 +362,13 @@ def cases(p: dict[str, Path]) -> list[Case]:
     for name in ("model_nan", "model_truncated", "model_bad_card", "model_no_weights", "model_empty", "file.txt"):
         add("model show", "model", "show", p[name])
     add("model show", "model", "show", r / "missing_model")
+
+    # model score
+    for name in ("model_nan", "model_truncated", "model_bad_card", "file.txt"):
+        add("model score", "model", "score", p[name], "--dataset", p["ds_good"])
+    for opt, v in (("--split", "random"), ("--part", "test"), ("--max-datapoints", "0"), ("--seed", "-1")):
+        add("model score", "model", "score", p["model_good"], "--dataset", p["ds_good"], opt, v)
+    add("model score", "model", "score", p["model_good"], "--dataset", r / "missing_dataset")
 
     # eval
     e = ["eval", "--policy", "centroid", "--workers", "1"]

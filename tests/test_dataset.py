@@ -333,3 +333,29 @@ def test_proposals_need_a_trained_model(tmp_path):
     with pytest.raises(InputError, match="--proposals .*no_model.*not a trained model"):
         gen.generate_dataset(tmp_path / "x", [str(record.directory)], KEYS[:1], "primesense", config)
     assert not (tmp_path / "x").exists()
+
+
+def test_a_dataset_in_the_sensors_noise_says_so_and_paper_datasets_keep_their_fingerprint(reference, tmp_path):
+    # `noise_model` decides the images, so it enters the fingerprint (a resumed run must match it);
+    # but datasets written before it was a choice (all in the paper's noise) must still resume, so
+    # for "paper" the fingerprint is the hash of the settings without the field, as it was.
+    import dataclasses
+    import hashlib
+    import json
+
+    from suctionbench.config import to_dict
+
+    card = read_card(reference)
+    settings = to_dict(CONFIG)
+    for key in ("proposals", "proposals_per_image", "noise_model"):
+        del settings[key]
+    old = {"config": settings, "camera": card["camera"], "objects": KEYS}
+    assert card["fingerprint"] == hashlib.sha256(json.dumps(old, sort_keys=True).encode()).hexdigest()[:16]
+    records = [load_object(k) for k in KEYS]
+    sensor = gen.generate_dataset(tmp_path / "sensor", [str(r.directory) for r in records], KEYS, "primesense",
+                                  dataclasses.replace(CONFIG, noise_model="sensor"))
+    assert sensor["config"]["noise_model"] == "sensor" and sensor["fingerprint"] != card["fingerprint"]
+    with pytest.raises(InputError, match="--noise 'kinect': unknown"):
+        gen.generate_dataset(tmp_path / "k", [str(records[0].directory)], KEYS[:1], "primesense",
+                             dataclasses.replace(CONFIG, noise_model="kinect"))
+    assert not (tmp_path / "k").exists()  # refused before anything is written

@@ -36,6 +36,7 @@ STUBS = {  # required arguments: parsing stops at the bad option before any of t
     "label": ["mesh.stl"], "pick": ["--object", "basic/box_tea"],
     "generate": ["--objects", "basic", "--datapoints", "1", "--out", "o"],
     "dataset show": ["d"], "train": ["--dataset", "d", "--out", "o"], "model show": ["m"],
+    "model score": ["m", "--dataset", "d"],
     "eval": ["--policy", "centroid", "--set", "basic", "--out", "o"], "report": ["r", "--out", "o"],
     "objects show": ["basic/x"], "objects import": ["m.stl"], "plan": ["--depth", "d.npy"],
 }

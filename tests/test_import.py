@@ -502,14 +502,34 @@ def test_convex_pieces_a_few_micrometres_apart_are_joined(tmp_path):
     assert mesh.is_watertight and len(mesh.split(only_watertight=False)) == 1
 
 
-def test_a_gap_wider_than_the_tolerance_is_two_bodies():
-    from suctionbench.objects.repair import GAP_MAX
+def test_a_gap_wider_than_an_assemblys_clearance_is_two_bodies():
+    from suctionbench.objects.repair import assembly_clearance
 
-    size = 0.06
-    apart = 3 * GAP_MAX * size  # 0.18 mm: a real gap, not a numerical one
-    mesh = trimesh.util.concatenate([_box((0.03, 0.03, 0.03)), _box((0.03, 0.03, 0.03), (0.03 + apart, 0, 0))])
-    with pytest.raises(InputError, match=r"2 disconnected bodies \(.*the nearest 0.18 mm apart\)"):
+    # A 60.9 mm object: ISO 2768-m permits +-0.3 mm on 30-120 mm, so two facing surfaces of a made
+    # part may close a drawn gap of 0.6 mm between them; 0.9 mm is a real gap (two objects).
+    assert assembly_clearance(0.0609) == pytest.approx(0.0006)
+    mesh = trimesh.util.concatenate([_box((0.03, 0.03, 0.03)), _box((0.03, 0.03, 0.03), (0.0309, 0, 0))])
+    with pytest.raises(InputError, match=r"2 disconnected bodies \(.*the nearest 0.9 mm apart, beyond the 0.6 mm"):
         _solid(mesh)
+
+
+def test_parts_of_an_assembly_drawn_with_clearance_are_joined():
+    # A 0.5 m plate on a 0.2 m block, drawn 1.2 mm above it (as CAD assemblies leave clearances):
+    # the object is 0.5 m, where ISO 2768-m permits +-0.8 mm, so a made part closes up to 1.6 mm:
+    # one body. The bridge fills at most the gap over the block's top (0.2 x 0.2 m x 1.2 mm =
+    # 48 cm^3) and removes nothing, so the volume lies between the pieces' sum and that plus 48 cm^3.
+    from suctionbench.objects.repair import assembly_clearance
+
+    assert assembly_clearance(0.5) == pytest.approx(0.0016) and assembly_clearance(0.005) == pytest.approx(0.0002)
+    block = _box((0.2, 0.2, 0.1))
+    plate = _box((0.5, 0.3, 0.01), (0.0, 0.0, 0.05 + 0.0012 + 0.005))
+    solid = _solid(trimesh.util.concatenate([block, plate]))
+    assert solid.mesh.is_watertight and len(solid.mesh.split(only_watertight=False)) == 1
+    pieces = 0.2 * 0.2 * 0.1 + 0.5 * 0.3 * 0.01
+    assert pieces <= solid.mesh.volume <= pieces + 0.2 * 0.2 * 0.0012 * 1.01
+    assert any(re.search(r"1 gap of up to 1.2 mm between pieces closed \(up to 1.6 mm", n) for n in solid.notes)
+    with pytest.raises(InputError, match=r"the nearest 2 mm apart, beyond the 1.6 mm"):  # 2 mm: a real gap
+        _solid(trimesh.util.concatenate([block, _box((0.5, 0.3, 0.01), (0.0, 0.0, 0.05 + 0.002 + 0.005))]))
 
 
 def test_loose_crumbs_are_dropped_but_a_second_object_is_not():

@@ -41,7 +41,7 @@ from suctionbench.learning.models import (
     count_parameters,
     tf_lrn_to_torch,
 )
-from suctionbench.learning.train import TrainConfig, _loss, train
+from suctionbench.learning.train import TrainConfig, _loss, decision_threshold, evaluate, train
 from suctionbench.sensing.noise import DepthNoiseConfig
 from suctionbench.sensing.thumbnails import ThumbnailConfig, extract_context_thumbnails, extract_thumbnails
 
@@ -500,6 +500,32 @@ def test_soft_target_is_the_cross_entropy_against_the_metric():
     assert float(shifted.grad.abs().min()) > 1e-3
 
 
+class _ConstantQ(torch.nn.Module):
+    """A network that says q for every grasp."""
+
+    def __init__(self, q: float):
+        super().__init__()
+        self.logit = math.log(q / (1 - q))
+
+    def forward(self, images, poses):
+        return torch.stack([torch.zeros(len(images)), torch.full((len(images),), self.logit)], dim=1)
+
+
+def test_a_soft_network_is_scored_at_the_labels_own_threshold(dataset):
+    # A soft network's q estimates the metric (the soft cross-entropy is least at q = E[metric]),
+    # so "positive" (metric > 0.2) for it is q > 0.2; a binary network's q estimates P(metric >
+    # 0.2), so q > 0.5. A network saying q = 0.3 everywhere thus calls every grasp positive when
+    # it is soft (accuracy = the positive rate) and every grasp negative when binary (1 - rate).
+    assert decision_threshold("soft", 0.2) == 0.2 and decision_threshold("binary", 0.2) == 0.5
+    val = SplitData(dataset, "image_wise", "val")
+    stats = val.compute_stats()
+    soft = evaluate(_ConstantQ(0.3), val, stats, 0.2, torch.device("cpu"), "soft")
+    binary = evaluate(_ConstantQ(0.3), val, stats, 0.2, torch.device("cpu"), "binary")
+    assert 0 < soft["positive_rate"] < 1
+    assert soft["accuracy"] == pytest.approx(soft["positive_rate"])
+    assert binary["accuracy"] == pytest.approx(1 - binary["positive_rate"]) == soft["accuracy_at_half"]
+
+
 def test_soft_target_learns_the_expected_metric(dataset, tmp_path):
     # The synthetic positives' metric is U(0.5, 1) whatever the image (synthetic_thumbnails), so the
     # best a net can say of an unseen positive is the conditional mean, 0.75: the minimiser of the
@@ -746,6 +772,18 @@ def test_cli_train_and_show(dataset, tmp_path):
     shown = json.loads(result.stdout.strip().splitlines()[-1])
     assert shown["arch"] == "compact" and shown["parameters"] == 36_082
     assert shown["val_accuracy"] == trained["val_accuracy"]
+
+    # model score: the run's own validation datapoints (image_wise, its 30-datapoint subset drawn
+    # with the run's seed is not reproduced here, so the whole split) against the card's label
+    result = runner.invoke(app, ["model", "score", str(out), "--dataset", str(dataset), "--split", "image_wise",
+                                 "--json"])
+    assert result.exit_code == 0, result.output
+    scored = json.loads(result.stdout.strip().splitlines()[-1])
+    assert scored["datapoints"] == len(read_split(dataset, "image_wise", "val")) and scored["target"] == "binary"
+    assert scored["decision_threshold"] == 0.5 and scored["accuracy"] == scored["accuracy_at_half"]
+    assert 0.0 <= scored["accuracy"] <= 1.0 and 0.0 < scored["positive_rate"] < 1.0
+    result = runner.invoke(app, ["model", "score", str(out), "--dataset", str(dataset), "--part", "test", "--json"])
+    assert result.exit_code == 2 and "split part 'test'" in json.loads(result.stdout.strip().splitlines()[-1])["error"]
 
     result = runner.invoke(app, ["train", "--dataset", str(tmp_path / "nope"), "--out", str(out), "--json"])
     assert result.exit_code == 2 and "not a directory" in json.loads(result.stdout.strip().splitlines()[-1])["error"]

@@ -327,3 +327,24 @@ def test_uint8_grid_frames_by_label(tmp_path):
     assert first[1] > 150 > first[0] and second[0] > 150 > second[1]
     save_png(tmp_path / "grid.png", grid)
     assert (tmp_path / "grid.png").stat().st_size > 0
+
+
+def test_a_dataset_rendered_with_the_sensor_noise_gets_the_cameras_own_error():
+    # A flat table 0.6 m away. The simulated sensor's noise is independent per pixel with std
+    # base + quadratic (z - offset)^2 = 1.2 mm + 1.9 mm/m^2 x (0.2 m)^2 = 1.276 mm and no bias.
+    # The paper's model adds one scale factor per image, alpha ~ Gamma(1000, 1/1000) (std 3.16 %,
+    # i.e. 19 mm at 0.6 m, shared by every pixel), and a field of ~4.1 mm pixel std correlated over
+    # ~3 px: bumps of millimetres the size of the cup's lip, where the sensor's independent errors
+    # average out over the cup's ~130 pixels (its pixel differences: sqrt(2) x 1.276 mm).
+    from suctionbench.errors import InputError
+    from suctionbench.sensing.noise import NOISE_MODELS, noisy_image
+
+    assert NOISE_MODELS == ("paper", "sensor")
+    depth = np.full((240, 320), 0.6, dtype=np.float32)
+    sensor = noisy_image(depth, np.random.default_rng(0), "sensor") - depth
+    assert abs(float(sensor.mean())) < 2e-5 and float(sensor.std()) == pytest.approx(1.276e-3, rel=0.02)
+    assert float(np.diff(sensor, axis=1).std()) == pytest.approx(math.sqrt(2) * 1.276e-3, rel=0.02)
+    offsets = [float((noisy_image(depth, np.random.default_rng(s), "paper") - depth).mean()) for s in range(40)]
+    assert 0.01 < float(np.std(offsets)) < 0.03  # the image-wide scale error, 19 mm expected
+    with pytest.raises(InputError, match="--noise 'kinect': unknown"):
+        noisy_image(depth, np.random.default_rng(0), "kinect")

@@ -52,6 +52,9 @@ def generate(
     scene: Annotated[str, typer.Option(help="table (one object in a stable pose, the paper's) or bin (a cluttered "
                                             "bin per 1,000 datapoints: grasps labelled on their own object, "
                                             "0 where the gripper's path meets a neighbour or a wall).")] = "table",
+    noise: Annotated[str, typer.Option(help="Image noise: paper (Dex-Net's: a ~3 % scale error and a correlated "
+                                            "~4 mm field) or sensor (the simulated camera's per-pixel noise, "
+                                            "what the benchmark's robot sees).")] = "paper",
     proposals: Annotated[Path | None, typer.Option(help="A trained model's directory: label its dense policy's best "
                                                        "grasps on every image too (on-policy data).")] = None,
     proposals_per_image: Annotated[int, typer.Option(help="With --proposals: the policy's best grasps per image "
@@ -78,7 +81,8 @@ def generate(
         records = resolve_objects(objects)
         config = GenerationConfig(
             datapoints=datapoints, seed=seed, grasps_per_object=grasps_per_object,
-            label=label, scene=scene, proposals=None if proposals is None else str(proposals.resolve()),
+            label=label, scene=scene, noise_model=noise,
+            proposals=None if proposals is None else str(proposals.resolve()),
             proposals_per_image=proposals_per_image,
         )
         start = time.perf_counter()

@@ -1,4 +1,4 @@
-"""`suctionbench train` and `suctionbench model show`."""
+"""`suctionbench train`, `suctionbench model show` and `suctionbench model score`."""
 
 from __future__ import annotations
 
@@ -52,7 +52,9 @@ def train_command(dataset: Path | str, out: Path | str, config: Any) -> str:
         str(config.epochs), "--device", config.device, "--split", config.split, "--batch-size", str(config.batch_size),
         *(["--max-datapoints", str(config.max_train_datapoints)] if config.max_train_datapoints else []),
         *(["--max-val-datapoints", str(config.max_val_datapoints)] if config.max_val_datapoints else []),
-        "--augment" if config.augment.enabled else "--no-augment", "--target", config.target,
+        "--augment" if config.augment.enabled else "--no-augment",
+        *(["--no-augment-noise"] if config.augment.enabled and not config.augment.noise else []),
+        "--target", config.target,
         "--seed", str(config.seed),
         *(["--init", config.init] if config.init else []),
         *(["--average", str(config.average)] if config.average is not None else []),
@@ -76,6 +78,9 @@ def train_cmd(
     max_val_datapoints: Annotated[int | None, typer.Option(
         help="Validate on a random subset of this many (after every epoch).")] = None,
     augment: Annotated[bool, typer.Option(help="Noise and symmetrisation augmentation (gqcnn's).")] = True,
+    augment_noise: Annotated[bool, typer.Option(help="With --augment: the paper's noise on every training image "
+                                                     "too (--no-augment-noise: flips only, for data rendered with "
+                                                     "`generate --noise sensor`).")] = True,
     target: Annotated[str, typer.Option(help="What the loss fits: binary (gqcnn's: robust label > threshold) or "
                                              "soft (the robust label itself, as a probability).")] = "binary",
     init: Annotated[str | None, typer.Option(help="Fine-tune: start from this trained model's weights and input "
@@ -93,14 +98,15 @@ def train_cmd(
 
     def body() -> dict[str, Any]:
         from suctionbench.dataset.verify import check_dataset, record_check
-        from suctionbench.learning.data import AUGMENT_GQCNN, AUGMENT_OFF
+        from suctionbench.learning.data import AUGMENT_FLIPS, AUGMENT_GQCNN, AUGMENT_OFF
         from suctionbench.learning.train import TrainConfig, train
 
         checked = check_dataset(dataset)  # never train on a damaged dataset or NaN labels
 
         config = TrainConfig(arch=arch, epochs=epochs, device=device, split=split, batch_size=batch_size,
                              max_train_datapoints=max_datapoints, max_val_datapoints=max_val_datapoints,
-                             augment=AUGMENT_GQCNN if augment else AUGMENT_OFF, target=target, seed=seed,
+                             augment=(AUGMENT_GQCNN if augment_noise else AUGMENT_FLIPS) if augment else AUGMENT_OFF,
+                             target=target, seed=seed,
                              init=init, average=average, load_threads=load_threads)
         with _train_progress(not as_json) as update:
             metrics = train(dataset, out, config, progress=update, command=train_command(dataset, out, config),
@@ -141,5 +147,44 @@ def model_show(
         if not as_json:
             print_kv(str(directory), summary)
         return summary
+
+    run_command(as_json, body)
+
+
+@model_app.command("score")
+def model_score(
+    directory: Annotated[Path, typer.Argument(help="Model directory (model.json + model.safetensors).")],
+    dataset: Annotated[Path, typer.Option(help="Dataset directory to score it on (from `suctionbench generate`).")],
+    split: Annotated[str, typer.Option(help="Split: image_wise or object_wise.")] = "object_wise",
+    part: Annotated[str, typer.Option(help="Side of the split: val (held out) or train.")] = "val",
+    max_datapoints: Annotated[int | None, typer.Option(help="Score a random subset of this many.")] = None,
+    seed: SeedOpt = 0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Held-out accuracy and AP of a trained model on a dataset's split, against the dataset's own
+    label (metric > its threshold): the training run's figures, recomputed for any model and data."""
+
+    def body() -> dict[str, Any]:
+        import numpy as np
+
+        from suctionbench.dataset.storage import read_card
+        from suctionbench.learning.checkpoint import load_model
+        from suctionbench.learning.data import SplitData, label_threshold
+        from suctionbench.learning.train import evaluate
+
+        model = load_model(directory)
+        threshold = label_threshold(read_card(dataset))
+        data = SplitData(dataset, split, part, max_datapoints=max_datapoints, subset_rng=np.random.default_rng(seed),
+                         image_channels=model.image_channels, object_context=model.pose_dim > 2)
+        target = model.card.get("label", {}).get("target", "binary")
+        scored = evaluate(model.network, data, model.stats, threshold, model.device, target)
+        result = {"model": str(directory), "dataset": str(dataset), "split": f"{split}/{part}",
+                  "datapoints": data.num_datapoints, "target": target, "label_threshold": threshold,
+                  "decision_threshold": scored["decision_threshold"], "accuracy": scored["accuracy"],
+                  "accuracy_at_half": scored["accuracy_at_half"], "ap": scored["ap"],
+                  "positive_rate": scored["positive_rate"], "loss": scored["loss"]}
+        if not as_json:
+            print_kv(str(directory), result)
+        return result
 
     run_command(as_json, body)

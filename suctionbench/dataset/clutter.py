@@ -28,7 +28,7 @@ from suctionbench.dataset.generate import MAX_IMAGES_PER_UNIT, UNIT_FIELDS, _emp
 from suctionbench.geometry.sampling import sample_surface_grasps, smoothed_approaches
 from suctionbench.objects.build import ObjectRecord
 from suctionbench.sensing.camera import DepthRenderer, body_image, resolve_camera, sample_camera_pose
-from suctionbench.sensing.noise import apply_depth_noise
+from suctionbench.sensing.noise import noisy_image
 from suctionbench.sensing.thumbnails import (
     extract_context_thumbnails,
     extract_thumbnails,
@@ -92,7 +92,7 @@ class _BinUnit:
                     break
                 depth = renderer.render(ep.data, self.scene.camera)
                 segmentation = renderer.segment(ep.data, self.scene.camera)
-                noisy = apply_depth_noise(depth, self.rng, c.noise)
+                noisy = noisy_image(depth, self.rng, c.noise_model, c.noise)
                 seen = body_image(self.scene.model, segmentation)
                 pool = self._visible(depth)
                 if pool:

@@ -277,6 +277,10 @@ class AugmentConfig:
 AUGMENT_GQCNN = AugmentConfig()
 """gqcnn's Dex-Net 3.0 augmentation: Gamma noise, GP field with p 0.5, symmetrisation."""
 
+AUGMENT_FLIPS = AugmentConfig(noise=False)
+"""Symmetrisation only: for images that already carry the noise the network will see (`generate
+--noise sensor`), where the paper's noise on top would hide what the sensor shows."""
+
 AUGMENT_OFF = AugmentConfig(noise=False, symmetrize=False)
 """No augmentation."""
 

@@ -115,6 +115,16 @@ good grasps; the soft target (cross-entropy against the metric, whose minimum ov
 metric) makes the network's q the expected resistance and keeps that order."""
 
 
+def decision_threshold(target: str, threshold: float) -> float:
+    """The q above which a network trained on `target` calls a grasp positive (label: metric >
+    `threshold`), for its accuracy. Binary: q estimates P(metric > threshold), so 0.5 (the Bayes
+    decision). Soft: q estimates the metric itself (the soft cross-entropy is least at q = E[metric
+    | input], `TARGETS`), so the label's own test applies to it: q > threshold. (Scored at 0.5, a
+    soft network's q = 0.3 for a grasp that resists 30 % of the perturbations, a positive, would
+    count as a miss.)"""
+    return float(threshold) if target == "soft" else 0.5
+
+
 @dataclass(frozen=True)
 class TrainConfig:
     """Training run settings (defaults: gqcnn's Dex-Net 3.0 recipe on the dn3 network)."""
@@ -411,8 +421,9 @@ def _loss(logits: torch.Tensor, metric: np.ndarray, labels: torch.Tensor, target
 
 def evaluate(network: torch.nn.Module, data: SplitData, stats: NormStats, threshold: float,
              device: torch.device, target: str = "binary") -> dict[str, Any]:
-    """Loss (of `target`), accuracy (q > 0.5 against the binary label), AP and the scores / labels of
-    a split, in index order, no augmentation."""
+    """Loss (of `target`), accuracy (q above `decision_threshold` against the binary label; and
+    `accuracy_at_half`, q > 0.5, as scored before 2026-11-27), AP and the scores / labels of a split,
+    in index order, no augmentation."""
     network.eval()
     scores, labels, loss_sum = [], [], 0.0
     with torch.no_grad():
@@ -428,7 +439,10 @@ def evaluate(network: torch.nn.Module, data: SplitData, stats: NormStats, thresh
     q = np.concatenate(scores) if scores else np.zeros(0)
     y = np.concatenate(labels) if labels else np.zeros(0, dtype=np.int64)
     n = max(len(y), 1)
-    return {"loss": loss_sum / n, "accuracy": float(np.mean((q > 0.5) == (y == 1))) if len(y) else math.nan,
+    cut = decision_threshold(target, threshold)
+    return {"loss": loss_sum / n, "accuracy": float(np.mean((q > cut) == (y == 1))) if len(y) else math.nan,
+            "accuracy_at_half": float(np.mean((q > 0.5) == (y == 1))) if len(y) else math.nan,
+            "decision_threshold": cut,
             "ap": average_precision(y, q), "positive_rate": float(np.mean(y)) if len(y) else math.nan,
             "scores": q, "labels": y}
 
@@ -441,6 +455,7 @@ def _train_epoch(session: _Session, data: SplitData, config: TrainConfig, thresh
     loss_sum = torch.zeros((), device=device)
     correct = torch.zeros((), device=device, dtype=torch.int64)
     seen = 0
+    cut = decision_threshold(config.target, threshold)
     start = time.perf_counter()
     batches = data.batches(config.batch_size, session.shuffle_rng, config.shuffle_shards)
     for step, batch in enumerate(batches, start=1):
@@ -459,7 +474,7 @@ def _train_epoch(session: _Session, data: SplitData, config: TrainConfig, thresh
         if session.averaged is not None:
             session.averaged.update_parameters(network)
         loss_sum += loss.detach() * len(batch)
-        correct += (logits.detach().argmax(dim=1) == labels).sum()
+        correct += ((torch.softmax(logits.detach().float(), dim=1)[:, 1] > cut) == labels.bool()).sum()
         seen += len(batch)
         if step % PROGRESS_EVERY == 0:
             report(seen, float(loss_sum) / seen, int(correct) / seen)
@@ -614,7 +629,7 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
                             "object context in metres: " + ", ".join(OBJECT_CONTEXT_COLUMNS) + "]"},
         "output": "probability that the grasp succeeds: softmax of the logits, column 1",
         "label": {"metric": METRIC_FIELD, "threshold": threshold, "positive": "metric > threshold",
-                  "target": config.target},
+                  "target": config.target, "decision": f"q > {decision_threshold(config.target, threshold):g}"},
         "dataset": _dataset_summary(dataset_dir, card, config.split, train_data, val_data),
         "command": command if command is not None else shlex.join(sys.argv),
         "versions": versions(),
@@ -643,6 +658,7 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
             "epoch": epoch, "lr": lr, "train_loss": result["loss"], "train_accuracy": result["accuracy"],
             "fit_accuracy": fit["accuracy"], "fit_ap": fit["ap"],
             "val_loss": evaluation["loss"], "val_accuracy": evaluation["accuracy"], "val_ap": evaluation["ap"],
+            "val_accuracy_at_half": evaluation["accuracy_at_half"],
             "train_seconds": result["seconds"], "train_images_per_s": result["images"] / max(result["seconds"], 1e-9),
         }))
         _checkpoint(out_dir, session, config, resume_key, base_card, evaluation, device)

@@ -24,12 +24,12 @@ undoes the usual disguises, in this order, and says what it did:
    points finds it and the mesh is rejected.
 6. *Pieces.* Several closed bodies (pieces that touch face to face, or overlap) are united with
    manifold3d; overlap would otherwise be counted twice in the volume. Pieces left apart by a gap
-   of at most GAP_MAX of the object (V-HACD decompositions and CAD assemblies leave micrometres)
-   are snapped across it and united; sealed voids the union encloses between overlapping pieces
-   are filled up to LOOSE_MAX of the volume (more is kept hollow, as the pieces leave it, like a
-   cavity modelled facing inwards); loose crumbs of at
-   most LOOSE_MAX of the volume are dropped; anything else apart is a second object, rejected with
-   the distance to it.
+   that a made part could close (`assembly_clearance`: twice the ISO 2768-m general tolerance at
+   the object's size, e.g. 0.6 mm at 30-120 mm; V-HACD decompositions leave micrometres, CAD
+   assemblies drawn clearances) are snapped across it and united; sealed voids the union encloses
+   between overlapping pieces are filled up to LOOSE_MAX of the volume (more is kept hollow, as the
+   pieces leave it, like a cavity modelled facing inwards); loose crumbs of at most LOOSE_MAX of the
+   volume are dropped; anything else apart is a second object, rejected with the distance to it.
 7. *Cracks.* Render meshes are often patches that do not meet (cracks and T-junctions between
    them, no shared vertices), or solids with a face the exporter left out. Where steps 3-4 leave
    no closed body, or too much open surface to drop, the solid the surface bounds is rebuilt from
@@ -73,8 +73,25 @@ OVERLAP_NOTE = 1e-3
 
 GAP_MAX = 1e-3
 """Closed pieces whose surfaces are at most this share of the object's largest extent apart are
-joined (the gap bridged): convex decompositions (V-HACD) and CAD exports leave micrometre gaps
-between pieces meant to touch."""
+always joined (the gap bridged): convex decompositions (V-HACD) and CAD exports leave micrometre
+gaps between pieces meant to touch (`assembly_clearance` joins wider ones, drawn clearances)."""
+
+GENERAL_TOLERANCE = ((0.006, 1e-4), (0.030, 2e-4), (0.120, 3e-4), (0.400, 5e-4), (1.0, 8e-4), (2.0, 1.2e-3),
+                     (4.0, 2e-3))
+"""ISO 2768-1 general tolerances for linear dimensions, class m ("medium", the class most drawings
+state, as "ISO 2768-mK"): (nominal size up to, m; permitted deviation +-, m). A made part may lie
+this far from its drawing without any tolerance written on it."""
+
+
+def assembly_clearance(size: float) -> float:
+    """Widest gap (m) between two pieces of an object of largest extent `size` that are joined as
+    touching: each of the two facing surfaces may sit its ISO 2768-m general tolerance at that size
+    towards the other (`GENERAL_TOLERANCE`), so in a made part a nominal gap up to twice it can be
+    closed: a CAD assembly's parts drawn with clearance (a board on its heat sink, a plate on its
+    frame), one rigid link. Never below GAP_MAX of the size (numerical gaps)."""
+    deviation = next((t for upto, t in GENERAL_TOLERANCE if size <= upto), GENERAL_TOLERANCE[-1][1])
+    return max(2.0 * deviation, GAP_MAX * size)
+
 
 LOOSE_MAX = 0.01
 """Pieces apart from the main body that together hold at most this share of the volume are dropped
@@ -457,9 +474,9 @@ def gap(a: trimesh.Trimesh, b: trimesh.Trimesh, limit: float) -> float:
     return float(min(near)) if near else np.inf
 
 
-def _snap(a: trimesh.Trimesh, b: trimesh.Trimesh, tolerance: float) -> trimesh.Trimesh:
+def _snap(a: trimesh.Trimesh, b: trimesh.Trimesh, tolerance: float, depth: float) -> trimesh.Trimesh:
     """`a` with each vertex within `tolerance` of `b`'s surface moved across the gap onto `b` and
-    `tolerance` / 2 into it, so that the two overlap and a union joins them."""
+    `depth` into it, so that the two overlap and a union joins them."""
     points = np.asarray(a.vertices, dtype=float).copy()
     inside = np.all((points >= b.bounds[0] - tolerance) & (points <= b.bounds[1] + tolerance), axis=1)
     idx = np.flatnonzero(inside)
@@ -469,7 +486,7 @@ def _snap(a: trimesh.Trimesh, b: trimesh.Trimesh, tolerance: float) -> trimesh.T
     near = distance <= tolerance
     idx, closest, distance, triangle = idx[near], closest[near], distance[near], triangle[near]
     direction = -np.asarray(b.face_normals)[triangle]  # into b
-    points[idx] = closest + 0.5 * tolerance * direction
+    points[idx] = closest + depth * direction
     return trimesh.Trimesh(points, np.asarray(a.faces), process=False)
 
 
@@ -507,14 +524,16 @@ def _fill_voids(piece: trimesh.Trimesh, notes: list[str]) -> tuple[trimesh.Trime
 
 
 def _unite(closed: list[trimesh.Trimesh], notes: list[str], tag: str) -> Solid:
-    """Unite closed bodies (pieces that touch, overlap, or lie within GAP_MAX of each other) into one;
-    loose pieces of at most LOOSE_MAX of the volume are dropped; anything else is an InputError."""
+    """Unite closed bodies (pieces that touch, overlap, or lie within `assembly_clearance` of each
+    other) into one; loose pieces of at most LOOSE_MAX of the volume are dropped; anything else is
+    an InputError."""
     summed = sum(_volume(b) for b in closed)
     pieces = _pieces(_union(closed, tag))
     if not pieces:
         raise InputError(f"{tag}: its closed bodies unite into nothing (degenerate)")
     size = max(float(np.ptp(np.vstack([p.vertices for p in pieces]), axis=0).max()), 1e-12)
-    tolerance = GAP_MAX * size
+    tolerance = assembly_clearance(size)
+    depth = 0.5 * GAP_MAX * size  # how far a snapped vertex reaches into the other piece
     gaps = []
     if len(pieces) > 1:
         n = len(pieces)
@@ -525,8 +544,8 @@ def _unite(closed: list[trimesh.Trimesh], notes: list[str], tag: str) -> Solid:
             _, labels = connected_components(graph, directed=False)
             snapped = list(pieces)
             for i, j, d in near:
-                snapped[j] = _snap(snapped[j], pieces[i], tolerance)
-                snapped[i] = _snap(snapped[i], pieces[j], tolerance)
+                snapped[j] = _snap(snapped[j], pieces[i], tolerance, depth)
+                snapped[i] = _snap(snapped[i], pieces[j], tolerance, depth)
                 gaps.append(d)
             groups = [np.flatnonzero(labels == k) for k in np.unique(labels)]
             joined = []
@@ -548,14 +567,16 @@ def _unite(closed: list[trimesh.Trimesh], notes: list[str], tag: str) -> Solid:
             apart = min(gap(pieces[0], p, np.inf) for p in loose) * 1000
             raise InputError(
                 f"{tag}: {len(pieces)} disconnected bodies (pieces that neither touch nor overlap, the nearest "
-                f"{apart:.3g} mm apart), expected one"
+                f"{apart:.3g} mm apart, beyond the {tolerance * 1000:.2g} mm a made part this size can close), "
+                "expected one"
             )
         pieces = pieces[:1]
     united, voids = _fill_voids(pieces[0], notes)
     if gaps:
         notes.append(
             f"{_count(len(gaps), 'gap')} of up to {max(gaps) * 1000:.2g} mm between pieces closed "
-            f"(gaps up to {GAP_MAX:.1%} of the object are numerical, as convex decompositions and CAD exports leave)"
+            f"(up to {tolerance * 1000:.2g} mm, twice the ISO 2768-m general tolerance at this size, pieces "
+            "meant to touch: numerical gaps of convex decompositions, clearances of CAD assemblies)"
         )
     if float(united.volume) < (1 - OVERLAP_NOTE) * (summed - sum(_volume(p) for p in loose)):
         notes.append(

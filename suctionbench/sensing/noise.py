@@ -316,3 +316,23 @@ def apply_axial_noise(
     sigma = config.base + config.quadratic * (depth - config.offset) ** 2
     noisy = depth + (sigma * rng.standard_normal(depth.shape)).astype(np.float32)
     return np.where(depth > 0, np.maximum(noisy, 0.0), 0.0).astype(np.float32)
+
+
+NOISE_MODELS = ("paper", "sensor")
+"""Noise a dataset's images get (`dataset.generate.GenerationConfig.noise_model`): the paper's
+model (`apply_depth_noise`, the training augmentation) or the simulated sensor's
+(`apply_axial_noise`, what the benchmark's robot sees)."""
+
+
+def check_noise_model(name: str) -> None:
+    """InputError naming `--noise` unless `name` is one of NOISE_MODELS."""
+    if name not in NOISE_MODELS:
+        raise InputError(f"--noise '{name}': unknown (known: {', '.join(NOISE_MODELS)})")
+
+
+def noisy_image(depth: np.ndarray, rng: np.random.Generator, model: str,
+                paper: DepthNoiseConfig = DEPTH_NOISE_PAPER) -> np.ndarray:
+    """A noisy copy of a rendered depth image under noise model `model` (NOISE_MODELS; "paper"
+    with the parameters `paper`), drawn from `rng`."""
+    check_noise_model(model)
+    return apply_axial_noise(depth, rng) if model == "sensor" else apply_depth_noise(depth, rng, paper)

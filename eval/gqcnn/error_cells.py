@@ -1,0 +1,59 @@
+"""Where a GQ-CNN's held-out errors lie: by what the nominal grasp does (seals? resists the load?).
+
+Usage: python eval/gqcnn/error_cells.py MODEL_DIR DATASET_DIR [MAX_DATAPOINTS] [SEED]
+Scores the model on the dataset's object-wise validation split (the subset `suctionbench model
+score --max-datapoints N --seed S` scores) and splits datapoints by the dataset's `seal_flags` (the
+unperturbed grasp seals) and `wrench_resistance` (it seals and resists the pick's loads). Per
+cell: share of the datapoints, the robust label's positive rate, the model's accuracy at its
+decision threshold (`learning.train.decision_threshold`) and its share of all errors. Seal is a
+matter of the surface under the cup (what the grasp thumbnail shows); resistance, once sealed, of
+the load: the object's weight and its moment about the grasp (mass and centre of mass, which a
+depth image shows only in part).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from suctionbench.dataset.storage import read_card
+from suctionbench.learning.checkpoint import load_model
+from suctionbench.learning.data import SplitData, label_threshold
+from suctionbench.learning.train import decision_threshold
+
+
+def main(model_dir: Path, dataset: Path, count: int, seed: int) -> None:
+    model = load_model(model_dir)
+    threshold = label_threshold(read_card(dataset))
+    cut = decision_threshold(model.card.get("label", {}).get("target", "binary"), threshold)
+    data = SplitData(dataset, "object_wise", "val", max_datapoints=count, subset_rng=np.random.default_rng(seed),
+                     image_channels=model.image_channels, object_context=model.pose_dim > 2)
+    q, metric, seal, resists = [], [], [], []
+    for shard in data.shards:
+        batch = data.load_shard(shard)
+        extra = data.reader.shard(shard, fields=["seal_flags", "wrench_resistance"])
+        q.append(model.predict(batch.images, batch.poses))
+        metric.append(batch.metric)
+        seal.append(extra["seal_flags"][data.rows(shard)])
+        resists.append(extra["wrench_resistance"][data.rows(shard)])
+    q, metric, seal, resists = (np.concatenate(x) for x in (q, metric, seal, resists))
+    label, said = metric > threshold, q > cut
+    wrong = said != label
+    print(f"{model_dir} on {dataset} (object_wise/val, {len(q)} datapoints): accuracy {np.mean(~wrong):.4f} "
+          f"at q > {cut:g}, {np.mean((q > 0.5) == label):.4f} at q > 0.5")
+    print("| nominal grasp | share | positive rate | accuracy | share of the errors | mean q |")
+    print("|---|---|---|---|---|---|")
+    for name, cell in (("no seal", seal == 0), ("seals, load not resisted", (seal == 1) & (resists == 0)),
+                       ("seals and resists", (seal == 1) & (resists == 1))):
+        if cell.any():
+            print(f"| {name} | {cell.mean():.3f} | {label[cell].mean():.3f} | {np.mean(~wrong[cell]):.3f} | "
+                  f"{wrong[cell].sum() / max(wrong.sum(), 1):.3f} | {q[cell].mean():.3f} |")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) not in (3, 4, 5):
+        sys.exit(__doc__)
+    main(Path(sys.argv[1]), Path(sys.argv[2]), int(sys.argv[3]) if len(sys.argv) > 3 else 50000,
+         int(sys.argv[4]) if len(sys.argv) > 4 else 0)

@@ -74,7 +74,8 @@ def bin_sections(run_dirs: list[Path], out: Path) -> dict[str, Any]:
         ("Bin picking: policies x bin tasks",
          "Each bin is filled with 5-15 objects (the task's range) and picked until clear, K failed attempts "
          "in a row, or twice its object count in attempts; the same bins for every policy. Clearance: objects "
-         "carried to the receptacle / objects in the bins; picks/hour: objects carried per hour of simulated "
+         "that end in the receptacle (carried there, or dropped there on a failed attempt) / objects in the "
+         "bins; picks/hour: objects carried per hour of simulated "
          "motion plus modelled compute; label precision: success among grasps the analytic label (rwr > 0.5, "
          "the target object alone) calls robust. Image policies plan once per object region of the image.",
          rows),

@@ -17,7 +17,6 @@ import numpy as np
 
 from suctionbench.dataset.storage import read_card
 from suctionbench.learning.checkpoint import load_model
-from suctionbench.learning.data import SplitData
 from suctionbench.learning.metrics import average_precision
 
 
@@ -31,8 +30,7 @@ def main() -> None:
     threshold = float(read_card(args.dataset).get("config", {}).get("label_threshold", 0.2))
     for directory in args.models:
         model = load_model(directory)
-        data = SplitData(args.dataset, args.split, "val", image_channels=model.image_channels,
-                         object_context=model.pose_dim > 2)
+        data = model.split_data(args.dataset, args.split, "val")
         q, metric = [], []
         for shard in data.shards:
             batch = data.load_shard(shard)

@@ -20,29 +20,22 @@ import numpy as np
 
 from suctionbench.dataset.storage import read_card
 from suctionbench.learning.checkpoint import load_model
-from suctionbench.learning.data import SplitData, label_threshold
-from suctionbench.learning.train import decision_threshold
+from suctionbench.learning.data import label_threshold
+from suctionbench.learning.train import score_model
 
 
 def main(model_dir: Path, dataset: Path, count: int, seed: int) -> None:
     model = load_model(model_dir)
     threshold = label_threshold(read_card(dataset))
-    cut = decision_threshold(model.card.get("label", {}).get("target", "binary"), threshold)
-    data = SplitData(dataset, "object_wise", "val", max_datapoints=count, subset_rng=np.random.default_rng(seed),
-                     image_channels=model.image_channels, object_context=model.pose_dim > 2)
-    q, metric, seal, resists = [], [], [], []
-    for shard in data.shards:
-        batch = data.load_shard(shard)
-        extra = data.reader.shard(shard, fields=["seal_flags", "wrench_resistance"])
-        q.append(model.predict(batch.images, batch.poses))
-        metric.append(batch.metric)
-        seal.append(extra["seal_flags"][data.rows(shard)])
-        resists.append(extra["wrench_resistance"][data.rows(shard)])
-    q, metric, seal, resists = (np.concatenate(x) for x in (q, metric, seal, resists))
-    label, said = metric > threshold, q > cut
-    wrong = said != label
-    print(f"{model_dir} on {dataset} (object_wise/val, {len(q)} datapoints): accuracy {np.mean(~wrong):.4f} "
-          f"at q > {cut:g}, {np.mean((q > 0.5) == label):.4f} at q > 0.5")
+    data = model.split_data(dataset, "object_wise", "val", max_datapoints=count, subset_rng=np.random.default_rng(seed))
+    scored = score_model(model, data, threshold)  # scores and labels in index order: shard by shard, row by row
+    q, label, cut = scored["scores"], scored["labels"] == 1, scored["decision_threshold"]
+    flags = [data.reader.shard(shard, fields=["seal_flags", "wrench_resistance"]) for shard in data.shards]
+    seal, resists = (np.concatenate([f[name][data.rows(shard)] for f, shard in zip(flags, data.shards, strict=True)])
+                     for name in ("seal_flags", "wrench_resistance"))
+    wrong = (q > cut) != label
+    print(f"{model_dir} on {dataset} (object_wise/val, {len(q)} datapoints): accuracy {scored['accuracy']:.4f} "
+          f"at q > {cut:g}, {scored['accuracy_at_half']:.4f} at q > 0.5")
     print("| nominal grasp | share | positive rate | accuracy | share of the errors | mean q |")
     print("|---|---|---|---|---|---|")
     for name, cell in (("no seal", seal == 0), ("seals, load not resisted", (seal == 1) & (resists == 0)),

@@ -169,17 +169,16 @@ def model_score(
 
         from suctionbench.dataset.storage import read_card
         from suctionbench.learning.checkpoint import load_model
-        from suctionbench.learning.data import SplitData, label_threshold
-        from suctionbench.learning.train import evaluate
+        from suctionbench.learning.data import label_threshold
+        from suctionbench.learning.train import score_model
 
         model = load_model(directory)
         threshold = label_threshold(read_card(dataset))
-        data = SplitData(dataset, split, part, max_datapoints=max_datapoints, subset_rng=np.random.default_rng(seed),
-                         image_channels=model.image_channels, object_context=model.pose_dim > 2)
-        target = model.card.get("label", {}).get("target", "binary")
-        scored = evaluate(model.network, data, model.stats, threshold, model.device, target)
+        data = model.split_data(dataset, split, part, max_datapoints=max_datapoints,
+                                subset_rng=np.random.default_rng(seed))
+        scored = score_model(model, data, threshold)
         result = {"model": str(directory), "dataset": str(dataset), "split": f"{split}/{part}",
-                  "datapoints": data.num_datapoints, "target": target, "label_threshold": threshold,
+                  "datapoints": data.num_datapoints, "target": model.target, "label_threshold": threshold,
                   "decision_threshold": scored["decision_threshold"], "accuracy": scored["accuracy"],
                   "accuracy_at_half": scored["accuracy_at_half"], "ap": scored["ap"],
                   "positive_rate": scored["positive_rate"], "loss": scored["loss"]}

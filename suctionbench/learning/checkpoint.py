@@ -28,7 +28,7 @@ import torch
 
 from suctionbench.errors import InputError
 from suctionbench.io import atomic_path, file_digest, json_safe, read_json  # noqa: F401  (json_safe: used by train.py)
-from suctionbench.learning.data import NormStats
+from suctionbench.learning.data import NormStats, SplitData
 from suctionbench.learning.models import IMAGE_SIZE, build_model
 
 WEIGHTS_NAME = "model.safetensors"
@@ -82,6 +82,18 @@ class GQCNNModel:
     def pose_dim(self) -> int:
         """Length of the pose vector the network reads: 2, or 8 with the object context."""
         return int(getattr(self.network, "pose_dim", 2))
+
+    @property
+    def target(self) -> str:
+        """What the network was trained to fit (`learning.train.TARGETS`); models from before the
+        choice existed were trained on the binary label."""
+        return self.card.get("label", {}).get("target", "binary")
+
+    def split_data(self, dataset: str | Path, kind: str, part: str, **options: Any) -> SplitData:
+        """One side of a dataset's split, read as this network reads it (its image channels, the
+        object context if its poses carry it); `options` as `SplitData`'s (e.g. `max_datapoints`)."""
+        return SplitData(dataset, kind, part, image_channels=self.image_channels, object_context=self.pose_dim > 2,
+                         **options)
 
     def predict(self, images: np.ndarray, poses: np.ndarray, batch_size: int = PREDICT_BATCH) -> np.ndarray:
         """Success probability q (N,) float64 for thumbnails float32 metres and poses (N, 2) =

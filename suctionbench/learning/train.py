@@ -447,6 +447,12 @@ def evaluate(network: torch.nn.Module, data: SplitData, stats: NormStats, thresh
             "scores": q, "labels": y}
 
 
+def score_model(model: Any, data: SplitData, threshold: float) -> dict[str, Any]:
+    """`evaluate` of a trained model (`learning.checkpoint.GQCNNModel`) on `data` (best read with
+    `model.split_data`), at the decision threshold of the target it was trained on."""
+    return evaluate(model.network, data, model.stats, threshold, model.device, model.target)
+
+
 def _train_epoch(session: _Session, data: SplitData, config: TrainConfig, threshold: float, device: torch.device,
                  report: Callable[[int, float, float], None]) -> dict[str, float]:
     """One pass over the training split; returns mean loss, accuracy, images and seconds."""
@@ -456,6 +462,7 @@ def _train_epoch(session: _Session, data: SplitData, config: TrainConfig, thresh
     correct = torch.zeros((), device=device, dtype=torch.int64)
     seen = 0
     cut = decision_threshold(config.target, threshold)
+    margin = math.log(cut / (1.0 - cut))  # q > cut, as logits: softmax's q = sigmoid(logit_1 - logit_0)
     start = time.perf_counter()
     batches = data.batches(config.batch_size, session.shuffle_rng, config.shuffle_shards)
     for step, batch in enumerate(batches, start=1):
@@ -474,7 +481,8 @@ def _train_epoch(session: _Session, data: SplitData, config: TrainConfig, thresh
         if session.averaged is not None:
             session.averaged.update_parameters(network)
         loss_sum += loss.detach() * len(batch)
-        correct += ((torch.softmax(logits.detach().float(), dim=1)[:, 1] > cut) == labels.bool()).sum()
+        scored = logits.detach().float()
+        correct += ((scored[:, 1] - scored[:, 0] > margin) == labels.bool()).sum()
         seen += len(batch)
         if step % PROGRESS_EVERY == 0:
             report(seen, float(loss_sum) / seen, int(correct) / seen)

@@ -347,7 +347,7 @@ def test_a_dataset_in_the_sensors_noise_says_so_and_paper_datasets_keep_their_fi
 
     card = read_card(reference)
     settings = to_dict(CONFIG)
-    for key in ("proposals", "proposals_per_image", "noise_model"):
+    for key in ("proposals", "proposals_per_image", "noise_model", "thumbnail"):
         del settings[key]
     old = {"config": settings, "camera": card["camera"], "objects": KEYS}
     assert card["fingerprint"] == hashlib.sha256(json.dumps(old, sort_keys=True).encode()).hexdigest()[:16]
@@ -359,3 +359,27 @@ def test_a_dataset_in_the_sensors_noise_says_so_and_paper_datasets_keep_their_fi
         gen.generate_dataset(tmp_path / "k", [str(records[0].directory)], KEYS[:1], "primesense",
                              dataclasses.replace(CONFIG, noise_model="kinect"))
     assert not (tmp_path / "k").exists()  # refused before anything is written
+
+
+def test_block_mean_thumbnails_change_only_the_grasp_thumbnails_of_a_dataset(reference, tmp_path):
+    # The sampling decides only how the grasp thumbnail reads the noisy image: the images, grasps,
+    # labels and context thumbnails draw the same random numbers, so they are equal bit for bit; the
+    # grasp thumbnails are each 3 x 3 block's mean instead of its centre, which on the (smooth)
+    # object surfaces differ by about the noise the mean removes (a few mm at most), not by the
+    # object's depth relief.
+    import dataclasses
+
+    from suctionbench.config import to_dict
+    from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN
+
+    mean = dataclasses.replace(THUMBNAIL_GQCNN, sampling="mean")
+    records = [load_object(k) for k in KEYS]
+    card = gen.generate_dataset(tmp_path / "mean", [str(r.directory) for r in records], KEYS, "primesense",
+                                dataclasses.replace(CONFIG, thumbnail=mean))
+    assert card["config"]["thumbnail"] == to_dict(mean) and card["fingerprint"] != read_card(reference)["fingerprint"]
+    a, b = DatasetReader(reference).shard(0), DatasetReader(tmp_path / "mean").shard(0)
+    for field in ("context_ims_tf_table", "robust_suction_wrench_resistance", "hand_poses", "object_context"):
+        np.testing.assert_array_equal(a[field], b[field])
+    point, block = a["depth_ims_tf_table"], b["depth_ims_tf_table"]
+    assert not np.array_equal(point, block)
+    assert np.median(np.abs(point - block)) < 0.005 < np.ptp(point[0])

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -85,22 +86,27 @@ def test_dense_q_is_the_network_on_each_pixels_window():
     assert action.q == pytest.approx(float(dense["q"].max()))
 
 
-def test_dense_q_of_a_context_net_reads_both_lattices():
+@pytest.mark.parametrize("sampling", ["point", "mean"])
+def test_dense_q_of_a_context_net_reads_both_lattices(sampling):
     # A two-stream (context) net: each pixel's dense q is the network's on the pair (grasp thumbnail
     # centred on its 3-px-lattice window, context thumbnail centred on its 9-px-lattice window of
-    # the box-filtered image), both at the bin's angle, with the pixel's own pose.
+    # the box-filtered image), both at the bin's angle, with the pixel's own pose; the grasp lattice
+    # reads the image as the model's dataset did (point samples, or 3 x 3 block means).
+    from suctionbench.config import to_dict
     from suctionbench.learning.checkpoint import GQCNNModel
     from suctionbench.learning.data import NormStats
     from suctionbench.learning.models import build_model
-    from suctionbench.sensing.thumbnails import THUMBNAIL_CONTEXT, extract_context_thumbnails
+    from suctionbench.sensing.thumbnails import THUMBNAIL_CONTEXT, extract_context_thumbnails, sample_thumbnails
 
     stats = NormStats((0.57, 0.59), (0.02, 0.01), (0.57, 0.2), (0.02, 0.1), count=1)
-    model = GQCNNModel(build_model("context", torch.Generator().manual_seed(2)), stats, {"arch": "context"})
+    thumbnail = dataclasses.replace(THUMBNAIL_GQCNN, sampling=sampling)
+    model = GQCNNModel(build_model("context", torch.Generator().manual_seed(2)), stats,
+                       {"arch": "context", "dataset": {"thumbnail": to_dict(thumbnail)}})
     _, observation, dense, pick, turn, (grasp, context) = _dense_windows(
         model, [THUMBNAIL_GQCNN, THUMBNAIL_CONTEXT], 40, 1)
     off = np.linalg.norm(context - dense["pixels"][pick], axis=1)
     assert off.max() <= 9 * math.sqrt(2) / 2 + 1e-9  # half the context lattice's diagonal
-    pairs = np.stack([extract_thumbnails(observation.depth, grasp, turn),
+    pairs = np.stack([sample_thumbnails(observation.depth, grasp, turn, thumbnail),
                       extract_context_thumbnails(observation.depth, context, turn)], axis=1)
     want = model.predict(pairs, dense["poses"][pick])
     assert want.std() > 1e-3  # the check can tell positions apart

@@ -43,7 +43,12 @@ from suctionbench.learning.models import (
 )
 from suctionbench.learning.train import TrainConfig, _loss, decision_threshold, evaluate, train
 from suctionbench.sensing.noise import DepthNoiseConfig
-from suctionbench.sensing.thumbnails import ThumbnailConfig, extract_context_thumbnails, extract_thumbnails
+from suctionbench.sensing.thumbnails import (
+    THUMBNAIL_GQCNN,
+    ThumbnailConfig,
+    extract_context_thumbnails,
+    extract_thumbnails,
+)
 
 N_SYNTH = 256
 """Datapoints of the synthetic dataset (4 shards of 64)."""
@@ -479,6 +484,8 @@ def test_compact_overfits_the_synthetic_set(dataset, tmp_path):
     card = json.loads((tmp_path / CARD_NAME).read_text())
     assert card["training"]["status"] == "complete" and len(card["history"]) == 20
     assert card["dataset"]["camera"]["name"] == "primesense" and card["dataset"]["cup"]["name"] == "default"
+    # the card says how the images were made, and the model reads its grasps the same way
+    assert card["dataset"]["noise_model"] == "paper" and model.thumbnail == THUMBNAIL_GQCNN
     assert card["label"]["threshold"] == 0.2 and card["versions"]["torch"] == torch.__version__
     assert (tmp_path / "precision_recall.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 

@@ -9,6 +9,7 @@ import pytest
 import torch
 from scipy import stats
 
+from suctionbench.errors import InputError
 from suctionbench.sensing.camera import PRIMESENSE
 from suctionbench.sensing.image import save_png
 from suctionbench.sensing.noise import (
@@ -25,11 +26,13 @@ from suctionbench.sensing.noise import (
 from suctionbench.sensing.thumbnails import (
     THUMBNAIL_CONTEXT,
     THUMBNAIL_GQCNN,
+    ThumbnailConfig,
     extract_context_thumbnails,
     extract_thumbnails,
     extract_thumbnails_reference,
     pose_vector,
     project_grasps,
+    sample_thumbnails,
     to_uint8_grid,
     visible_mask,
 )
@@ -348,3 +351,34 @@ def test_a_dataset_rendered_with_the_sensor_noise_gets_the_cameras_own_error():
     assert 0.01 < float(np.std(offsets)) < 0.03  # the image-wide scale error, 19 mm expected
     with pytest.raises(InputError, match="--noise 'kinect': unknown"):
         noisy_image(depth, np.random.default_rng(0), "kinect")
+
+
+def test_block_mean_thumbnails_average_independent_pixel_noise_and_keep_a_slope():
+    # Grasp thumbnails that hold their 3 x 3 block's mean ("mean" sampling) instead of its centre
+    # pixel: for independent per-pixel noise of standard deviation s (the simulated sensor's), the
+    # mean of 9 pixels has s / 3; point samples keep s. On a plane the mean of a linear function over
+    # a block symmetric about the sample point is its value there, so a noise-free slope reads the same.
+    mean = ThumbnailConfig(sampling="mean")
+    assert mean.block == 3 and THUMBNAIL_CONTEXT.block == 9 and THUMBNAIL_CONTEXT.sampling == "mean"
+    rng = np.random.default_rng(11)
+    sigma = 0.0013
+    noisy = (PLANE + sigma * rng.standard_normal((K.height, K.width))).astype(np.float32)
+    pixels = rng.uniform(100, [540, 380], (40, 2)).round() + 0.5  # crops inside; samples on pixel centres
+    angles = rng.choice([0.0, math.pi / 2, math.pi, -math.pi / 2], 40)  # axis-aligned
+    point = sample_thumbnails(noisy, pixels, angles, THUMBNAIL_GQCNN)
+    block = sample_thumbnails(noisy, pixels, angles, mean)
+    np.testing.assert_array_equal(point, extract_thumbnails(noisy, pixels, angles))  # gqcnn's as before
+    assert np.std(point) == pytest.approx(sigma, rel=0.05)
+    assert np.std(block) == pytest.approx(sigma / 3, rel=0.08)
+    cols = np.arange(K.width, dtype=np.float32)
+    slope = np.broadcast_to(PLANE + 0.0002 * cols, (K.height, K.width))  # 0.2 mm per pixel across the image
+    np.testing.assert_allclose(sample_thumbnails(slope, pixels, angles, mean),
+                               sample_thumbnails(slope, pixels, angles, THUMBNAIL_GQCNN), atol=1e-6)
+
+
+def test_thumbnail_configs_refuse_an_unknown_sampling_and_read_back_from_a_card():
+    with pytest.raises(InputError, match="sampling = 'median' must be one of point, mean"):
+        ThumbnailConfig(sampling="median")
+    assert ThumbnailConfig.from_dict({"crop_size": 96, "out_size": 32, "sampling": "mean"}, "card").block == 3
+    with pytest.raises(InputError, match="card: thumbnail .* is not a thumbnail config"):
+        ThumbnailConfig.from_dict({"crop": 96}, "card")

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from suctionbench.config import CUP_DEFAULT
+from suctionbench.config import CUP_DEFAULT, to_dict
 from suctionbench.dataset.render import TableScene
 from suctionbench.errors import InputError
 from suctionbench.objects.registry import load_object
@@ -29,7 +29,13 @@ from suctionbench.policies.base import (
 from suctionbench.policies.gqcnn import CEMConfig, GQCNNPolicy, fit_gmm
 from suctionbench.sensing.camera import PRIMESENSE, sample_camera_pose
 from suctionbench.sensing.noise import apply_axial_noise
-from suctionbench.sensing.thumbnails import extract_context_thumbnails, extract_thumbnails, project_grasps
+from suctionbench.sensing.thumbnails import (
+    ThumbnailConfig,
+    extract_context_thumbnails,
+    extract_thumbnails,
+    project_grasps,
+    sample_thumbnails,
+)
 
 HEURISTICS = ["random", "centroid", "planarity", "planarity-centroid"]
 OBJECTS = ["basic/box_tea", "typical/mug_classic", "adversarial/narrow_gear"]
@@ -371,7 +377,8 @@ def test_cem_feeds_a_two_channel_model_the_grasp_and_context_thumbnails():
 
 def test_cem_plans_with_a_trained_format_context_model(tmp_path):
     """A `context` network saved and loaded as a model directory (lazily, as `make_policy` does) plans
-    a grasp on the object; its q is the network's for the two thumbnails of that grasp."""
+    a grasp on the object; its q is the network's for the two thumbnails of that grasp, the grasp
+    thumbnail sampled as its card says its dataset was (here block means, not gqcnn's point samples)."""
     import torch
 
     from suctionbench.learning.checkpoint import GQCNNModel, load_model, save_model
@@ -379,8 +386,10 @@ def test_cem_plans_with_a_trained_format_context_model(tmp_path):
     from suctionbench.learning.models import build_model
 
     stats = NormStats((0.57, 0.59), (0.02, 0.01), (0.57, 0.2), (0.02, 0.1), count=1)
+    mean = ThumbnailConfig(sampling="mean")
     save_model(tmp_path, GQCNNModel(build_model("context", torch.Generator().manual_seed(0)), stats,
-                                    {"arch": "context"}))
+                                    {"arch": "context", "dataset": {"thumbnail": to_dict(mean)}}))
+    assert load_model(tmp_path).thumbnail == mean
     policy = make_policy("gqcnn", model=tmp_path, num_seed_samples=30, num_gmm_samples=10, num_iters=1)
     observation = dome_observation()
     action = policy.plan(observation, np.random.default_rng(1))
@@ -391,10 +400,12 @@ def test_cem_plans_with_a_trained_format_context_model(tmp_path):
     best = action.info["chosen"]
     pixels, points, approaches = (action.candidates[k][best:best + 1] for k in ("pixels", "points", "approaches"))
     _, _, angles = project_grasps(points, approaches, PRIMESENSE)
-    both = np.stack([extract_thumbnails(observation.depth, pixels, angles),
+    both = np.stack([sample_thumbnails(observation.depth, pixels, angles, mean),
                      extract_context_thumbnails(observation.depth, pixels, angles)], axis=1)
     q = load_model(tmp_path).predict(both, action.candidates["poses"][best:best + 1])
     assert float(q[0]) == pytest.approx(action.q, rel=1e-6)
+    points = np.stack([extract_thumbnails(observation.depth, pixels, angles), both[:, 1]], axis=1)
+    assert float(load_model(tmp_path).predict(points, action.candidates["poses"][best:best + 1])[0]) != action.q
 
 
 # --------------------------------------------------------------------------------------------------

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from pathlib import Path
 from typing import Annotated, Any
@@ -55,6 +56,9 @@ def generate(
     noise: Annotated[str, typer.Option(help="Image noise: paper (Dex-Net's: a ~3 % scale error and a correlated "
                                             "~4 mm field) or sensor (the simulated camera's per-pixel noise, "
                                             "what the benchmark's robot sees).")] = "paper",
+    thumbnail_sampling: Annotated[str, typer.Option(help="What a grasp thumbnail pixel holds: point (the depth at "
+                                                         "its 3 x 3 block's centre, gqcnn's) or mean (the block's "
+                                                         "mean depth).")] = "point",
     proposals: Annotated[Path | None, typer.Option(help="A trained model's directory: label its dense policy's best "
                                                        "grasps on every image too (on-policy data).")] = None,
     proposals_per_image: Annotated[int, typer.Option(help="With --proposals: the policy's best grasps per image "
@@ -70,8 +74,11 @@ def generate(
         from suctionbench.config import cup_preset
         from suctionbench.dataset.generate import GenerationConfig, generate_dataset
         from suctionbench.objects.registry import resolve_objects
+        from suctionbench.sensing.thumbnails import SAMPLINGS, THUMBNAIL_GQCNN
 
         label = label_config(cup_preset(cup), load)
+        if thumbnail_sampling not in SAMPLINGS:
+            raise InputError(f"--thumbnail-sampling '{thumbnail_sampling}': unknown (known: {', '.join(SAMPLINGS)})")
         if proposals is not None and scene != "table":
             raise InputError(f"--proposals with --scene {scene}: on-policy grasps are proposed on table scenes only")
         output_dir(out, "--out")
@@ -82,6 +89,7 @@ def generate(
         config = GenerationConfig(
             datapoints=datapoints, seed=seed, grasps_per_object=grasps_per_object,
             label=label, scene=scene, noise_model=noise,
+            thumbnail=dataclasses.replace(THUMBNAIL_GQCNN, sampling=thumbnail_sampling),
             proposals=None if proposals is None else str(proposals.resolve()),
             proposals_per_image=proposals_per_image,
         )

@@ -31,9 +31,9 @@ from suctionbench.sensing.camera import DepthRenderer, body_image, resolve_camer
 from suctionbench.sensing.noise import noisy_image
 from suctionbench.sensing.thumbnails import (
     extract_context_thumbnails,
-    extract_thumbnails,
     pose_vector,
     project_grasps,
+    sample_thumbnails,
     visible_mask,
 )
 
@@ -136,7 +136,8 @@ class _BinUnit:
             clear = np.array([path_is_clear(ep.model, ep.data, p, v, body, c.label.cup.radius, CUP_PATH_LENGTH)
                               for p, v in zip(p_world, v_world, strict=True)])
             n = len(group)
-            out["depth_ims_tf_table"].append(extract_thumbnails(noisy, pixels, angles)[..., None].astype(np.float32))
+            out["depth_ims_tf_table"].append(sample_thumbnails(noisy, pixels, angles, c.thumbnail)[..., None]
+                                             .astype(np.float32))
             out["context_ims_tf_table"].append(
                 extract_context_thumbnails(noisy, pixels, angles)[..., None].astype(np.float32))
             out["object_context"].append(image_object_context(self.intrinsics, depth, noisy, self.camera_pose, pixels,

@@ -32,6 +32,7 @@ from suctionbench.dataset.storage import FIELDS, SPLIT_DIR, TENSOR_DIR
 from suctionbench.errors import InputError
 from suctionbench.io import atomic_path
 from suctionbench.sensing.noise import DepthNoiseConfig, check_noise_model
+from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN, ThumbnailConfig
 
 if TYPE_CHECKING:
     from suctionbench.sensing.camera import CameraIntrinsics
@@ -128,6 +129,11 @@ class GenerationConfig:
     proposals_per_image: int = 8
     """With `proposals`: how many of the policy's best grasps (at least 1 cm apart) per image."""
 
+    thumbnail: ThumbnailConfig = THUMBNAIL_GQCNN
+    """The grasp thumbnail's geometry and sampling (`sensing.thumbnails.ThumbnailConfig`; gqcnn's
+    96 px crop at 32 x 32, point samples): a model trained on the dataset reads its grasps the same
+    way (its card records this, `GQCNNModel.thumbnail`)."""
+
 
 @dataclass(frozen=True)
 class Unit:
@@ -168,6 +174,8 @@ def config_fingerprint(config: GenerationConfig, camera: dict[str, Any], objects
         what["proposal_weights"] = model_fingerprint(config.proposals)
     if config.noise_model == "paper":  # and those from before the noise model was a choice
         del settings["noise_model"]
+    if config.thumbnail == THUMBNAIL_GQCNN:  # and before the thumbnail's sampling was
+        del settings["thumbnail"]
     blob = json.dumps(what, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
@@ -183,9 +191,9 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
     from suctionbench.sensing.noise import noisy_image
     from suctionbench.sensing.thumbnails import (
         extract_context_thumbnails,
-        extract_thumbnails,
         pose_vector,
         project_grasps,
+        sample_thumbnails,
         visible_mask,
     )
 
@@ -233,7 +241,8 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
         """Append the datapoints of grasps seen on one image (`mask`: the object's pixels): their
         labels `lab` (rwr, seal flags, wr; one row per grasp) and candidate ids `ids`."""
         rwr, seal, wr = lab
-        out["depth_ims_tf_table"].append(extract_thumbnails(noisy, pixels, angles)[..., None].astype(np.float32))
+        out["depth_ims_tf_table"].append(sample_thumbnails(noisy, pixels, angles, config.thumbnail)[..., None]
+                                         .astype(np.float32))
         context = extract_context_thumbnails(noisy, pixels, angles)
         out["context_ims_tf_table"].append(context[..., None].astype(np.float32))
         out["object_context"].append(image_object_context(intrinsics, depth, noisy, camera_pose, pixels, p_world,

@@ -30,6 +30,7 @@ from suctionbench.errors import InputError
 from suctionbench.io import atomic_path, file_digest, json_safe, read_json  # noqa: F401  (json_safe: used by train.py)
 from suctionbench.learning.data import NormStats, SplitData
 from suctionbench.learning.models import IMAGE_SIZE, build_model
+from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN, ThumbnailConfig
 
 WEIGHTS_NAME = "model.safetensors"
 CARD_NAME = "model.json"
@@ -82,6 +83,15 @@ class GQCNNModel:
     def pose_dim(self) -> int:
         """Length of the pose vector the network reads: 2, or 8 with the object context."""
         return int(getattr(self.network, "pose_dim", 2))
+
+    @property
+    def thumbnail(self) -> ThumbnailConfig:
+        """The grasp thumbnail's geometry and sampling the network was trained on, as its dataset
+        recorded it (cards from before the choice existed: gqcnn's point samples)."""
+        recorded = self.card.get("dataset", {}).get("thumbnail")
+        if recorded is None:
+            return THUMBNAIL_GQCNN
+        return ThumbnailConfig.from_dict(recorded, f"model card of '{self.arch}'")
 
     @property
     def target(self) -> str:

@@ -86,6 +86,7 @@ from suctionbench.learning.models import (
     pose_dim_of,
 )
 from suctionbench.sensing.object_context import OBJECT_CONTEXT_COLUMNS
+from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN
 
 PR_CURVE_NAME = "precision_recall.png"
 
@@ -397,7 +398,9 @@ def _dataset_summary(directory: Path, card: dict[str, Any], split: str, train_da
     return {
         "path": str(directory.resolve()), "fingerprint": card.get("fingerprint"), "datapoints": card.get("datapoints"),
         "positive_rate": card.get("positive_rate"), "camera": card.get("camera"),
-        "cup": card.get("cup", label.get("cup")), "noise": config.get("noise"), "seed": config.get("seed"),
+        "cup": card.get("cup", label.get("cup")), "noise_model": config.get("noise_model", "paper"),
+        "noise": config.get("noise"), "thumbnail": config.get("thumbnail", to_dict(THUMBNAIL_GQCNN)),
+        "seed": config.get("seed"),
         "objects": len(card.get("objects", [])) if isinstance(card.get("objects"), list) else None,
         "split": split, "num_train": train_data.num_datapoints, "num_val": val_data.num_datapoints,
         "suctionbench_version": card.get("suctionbench_version"),

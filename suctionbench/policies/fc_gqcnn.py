@@ -23,7 +23,7 @@ Algorithm (one `plan`)
    `refine` 0, the dense map's best and its dense q).
 
 A context network (two image streams) gets a second lattice per bin, of the context thumbnail's
-9-pixel pitch, resampled from the box-filtered image (`thumbnails.context_image`) as its context
+9-pixel pitch, resampled from the box-filtered image (`thumbnails.sampled_image`) as its context
 thumbnails are; each pixel reads its nearest window of each lattice (the context window at most
 6.4 pixels off, under a context thumbnail pixel).
 
@@ -49,6 +49,7 @@ from suctionbench.policies.gqcnn import (
     CEMConfig,
     GQCNNPolicy,
     LazyModel,
+    grasp_thumbnail,
     network_poses,
     pose_dim,
     resolve_model,
@@ -58,7 +59,6 @@ from suctionbench.sensing.thumbnails import (
     THUMBNAIL_CONTEXT,
     THUMBNAIL_GQCNN,
     ThumbnailConfig,
-    context_image,
     project_grasps,
     thumbnail_axes,
 )
@@ -78,11 +78,12 @@ class DenseConfig:
     """Which pixels are grasps (the CEM policy's seed sampler)."""
 
     thumbnail: ThumbnailConfig = THUMBNAIL_GQCNN
-    """The thumbnail the network was trained on (its crop and size set the lattice's pitch)."""
+    """The thumbnail for a model that states none (its crop and size set the lattice's pitch); a
+    trained model reads the one its dataset was cut with (`gqcnn.grasp_thumbnail`)."""
 
     context_thumbnail: ThumbnailConfig = THUMBNAIL_CONTEXT
     """The context thumbnail a two-stream (context) network was trained on: its own lattice, 3x
-    coarser, sampled from the box-filtered image (`thumbnails.context_image`)."""
+    coarser, sampled from the box-filtered image (`thumbnails.sampled_image`)."""
 
     def __post_init__(self) -> None:
         if not (isinstance(self.rotations, int) and self.rotations >= 1):
@@ -154,7 +155,7 @@ class FCGQCNNPolicy:
             network = getattr(model, "network", None)
             if network is None:
                 raise InputError(f"dense policy: model {model!r} has no network to convert (a trained GQ-CNN)")
-            for thumbnail in (self.config.thumbnail, self.config.context_thumbnail):
+            for thumbnail in (grasp_thumbnail(model, self.config.thumbnail), self.config.context_thumbnail):
                 if thumbnail.out_size != IMAGE_SIZE:
                     raise InputError(f"dense policy: thumbnail size {thumbnail.out_size}, the network reads "
                                      f"{IMAGE_SIZE} x {IMAGE_SIZE}")
@@ -175,10 +176,7 @@ class FCGQCNNPolicy:
         poses = network_poses(model, observation, cloud, depths, points, approaches, cfg.sampler.table_height, shape)
         step = 2.0 * math.pi / cfg.rotations
         bins = np.mod(np.rint(angles / step).astype(np.intp), cfg.rotations)
-        depth = np.asarray(observation.depth, dtype=np.float32)
-        views = [(cfg.thumbnail, depth)]  # (thumbnail geometry, image it samples) per image stream
-        if len(dense.streams) == 2:
-            views.append((cfg.context_thumbnail, context_image(depth, cfg.context_thumbnail)))
+        views = self.exact.images(observation)  # (thumbnail config, image it samples) per image stream
         pose_in = model.stats.normalise_poses(torch.from_numpy(poses.astype(np.float32)))
         kinds, bin_of = np.unique(bins, return_inverse=True)
         with torch.no_grad():  # every bin's lattice in one batch: one resampling and one trunk pass per stream
@@ -201,7 +199,7 @@ class FCGQCNNPolicy:
             q = torch.softmax(logits, dim=1)[:, 1].double().numpy()
         return {"rows": rows, "cols": cols, "pixels": pixels, "points": points, "approaches": approaches,
                 "poses": poses, "q": q, "rotations": len(kinds),
-                "context": views[1][1] if len(views) == 2 else None, "shape": shape}
+                "images": views, "shape": shape}
 
     def plan(self, observation: Observation, rng: np.random.Generator) -> GraspAction:
         start = time.perf_counter()
@@ -214,8 +212,8 @@ class FCGQCNNPolicy:
         if cfg.refine:
             count = min(cfg.refine, len(dense["q"]))
             top = np.argpartition(-dense["q"], count - 1)[:count]
-            exact = self.exact.score(observation, cloud, dense["rows"][top], dense["cols"][top], dense["context"],
-                                     dense["shape"])  # the context image and object filtered once per plan
+            exact = self.exact.score(observation, cloud, dense["rows"][top], dense["cols"][top], dense["images"],
+                                     dense["shape"])  # the images and object read once per plan
             pick = int(np.argmax(exact["q"]))
             best, q = int(top[pick]), float(exact["q"][pick])
         return GraspAction(

@@ -9,7 +9,8 @@ Algorithm (one `plan`)
    30 deg of the optical axis and 80 deg of straight down).
 2. Scoring a set of pixels: the grasp point is the depth pixel deprojected, the approach minus the
    smoothed normal there; the 32 x 32 thumbnail is cut from the raw depth image around the pixel
-   and turned to the approach's image direction (`extract_thumbnails`), and the pose vector is
+   (or its block means, for a model trained on those: `grasp_thumbnail`) and turned to the
+   approach's image direction (`extract_thumbnails`), and the pose vector is
    [gripper depth, angle between the approach and the table's downward normal] (`pose_vector`,
    with the table normal brought into the camera frame by the camera pose). One batched
    `model.predict(thumbnails, poses)` gives each grasp's success probability. A model with
@@ -65,10 +66,10 @@ from suctionbench.sensing.thumbnails import (
     THUMBNAIL_CONTEXT,
     THUMBNAIL_GQCNN,
     ThumbnailConfig,
-    context_image,
     extract_thumbnails,
     pose_vector,
     project_grasps,
+    sampled_image,
 )
 
 DEFAULT_MODEL = ("models", "gqcnn-context-pose-avg")
@@ -105,6 +106,14 @@ class GraspQualityModel(Protocol):
 def image_channels(model: Any) -> int:
     """Image channels `model` reads: its ``image_channels`` attribute, 1 if it has none."""
     return int(getattr(model, "image_channels", 1))
+
+
+def grasp_thumbnail(model: Any, fallback: ThumbnailConfig) -> ThumbnailConfig:
+    """The grasp thumbnail geometry and sampling `model` reads: its ``thumbnail`` attribute (a
+    trained model states the one its dataset was cut with), `fallback` (the policy config's) if it
+    states none."""
+    stated = getattr(model, "thumbnail", None)
+    return stated if isinstance(stated, ThumbnailConfig) else fallback
 
 
 def pose_dim(model: Any) -> int:
@@ -181,7 +190,8 @@ class CEMConfig:
     down, 1 px depth smoothing (gqcnn's Dex-Net 3.0 configuration)."""
 
     thumbnail: ThumbnailConfig = THUMBNAIL_GQCNN
-    """Thumbnail geometry the network was trained on (96 px crop scaled to 32 x 32)."""
+    """Thumbnail geometry and sampling for a model that states none (96 px crop scaled to 32 x 32,
+    point samples); a trained model reads the one its dataset was cut with (`grasp_thumbnail`)."""
 
     context_thumbnail: ThumbnailConfig = THUMBNAIL_CONTEXT
     """Context thumbnail geometry, used only for a model with two image channels (288 px crop,
@@ -337,6 +347,11 @@ class LazyModel:
         """The loaded model's pose vector length (loads it)."""
         return pose_dim(self.load())
 
+    @property
+    def thumbnail(self) -> ThumbnailConfig | None:
+        """The grasp thumbnail the loaded model was trained on (loads it)."""
+        return getattr(self.load(), "thumbnail", None)
+
     def __repr__(self) -> str:
         return f"LazyModel('{self.path}')"
 
@@ -365,25 +380,32 @@ class GQCNNPolicy:
     def __repr__(self) -> str:
         return f"GQCNNPolicy({self.model!r}, {self.config})"
 
+    def images(self, observation: Observation) -> list[tuple[ThumbnailConfig, np.ndarray]]:
+        """Per image channel the model reads, its thumbnail config and the image it samples
+        (`sampled_image`: block means filtered once per plan, not once per round)."""
+        cfg = self.config
+        views = [grasp_thumbnail(self.model, cfg.thumbnail)]
+        if image_channels(self.model) == 2:
+            views.append(cfg.context_thumbnail)
+        return [(view, sampled_image(observation.depth, view)) for view in views]
+
     def score(
         self, observation: Observation, cloud: SceneCloud, rows: np.ndarray, cols: np.ndarray,
-        context: np.ndarray | None = None, shape: ObjectShape | None = None,
+        images: list[tuple[ThumbnailConfig, np.ndarray]] | None = None, shape: ObjectShape | None = None,
     ) -> dict[str, np.ndarray]:
         """Grasps at pixels (rows, cols) with their pose vectors and predicted quality.
 
         Thumbnails (N, 32, 32) for a one-channel model; for a two-channel one (N, 2, 32, 32), the
-        grasp thumbnail and the context thumbnail of the same grasp, cut from `context` (the
-        observation's `context_image`, filtered here if not given: `plan` filters once). For a
-        model that reads the object context, `shape` is the `seen_object` (likewise once per plan).
+        grasp thumbnail and the context thumbnail of the same grasp, cut from `images` (`images`,
+        computed here if not given: `plan` computes them once). For a model that reads the object
+        context, `shape` is the `seen_object` (likewise once per plan).
         """
         pixels, points, approaches = cloud.grasps_at(rows, cols)
         _, depths, angles = project_grasps(points, approaches, cloud.intrinsics)
-        thumbnails = extract_thumbnails(observation.depth, pixels, angles, self.config.thumbnail)
-        if image_channels(self.model) == 2:
-            if context is None:
-                context = context_image(observation.depth, self.config.context_thumbnail)
-            wide = extract_thumbnails(context, pixels, angles, self.config.context_thumbnail)
-            thumbnails = np.stack([thumbnails, wide], axis=1)
+        views = self.images(observation) if images is None else images
+        thumbnails = np.stack([extract_thumbnails(image, pixels, angles, view) for view, image in views], axis=1)
+        if len(views) == 1:
+            thumbnails = thumbnails[:, 0]
         poses = network_poses(self.model, observation, cloud, depths, points, approaches,
                               self.config.sampler.table_height, shape)
         q = np.asarray(self.model.predict(thumbnails, poses), dtype=float).reshape(-1)
@@ -413,10 +435,10 @@ class GQCNNPolicy:
         start = time.perf_counter()
         cfg = self.config
         cloud = scene_cloud(observation, cfg.sampler)
-        context = context_image(observation.depth, cfg.context_thumbnail) if image_channels(self.model) == 2 else None
+        images = self.images(observation)
         shape = seen_object(observation, cloud, cfg.sampler.table_height) if pose_dim(self.model) > 2 else None
         rows, cols = cloud.sample(cfg.num_seed_samples, rng)
-        rounds = [self.score(observation, cloud, rows, cols, context, shape)]
+        rounds = [self.score(observation, cloud, rows, cols, images, shape)]
         for _ in range(cfg.num_iters):
             q = rounds[-1]["q"]
             elite = np.argsort(-q, kind="stable")[: cfg.elite_count(len(q))]
@@ -428,7 +450,7 @@ class GQCNNPolicy:
             rows, cols = self._resample(gmm, mean, std, cloud, rng)
             if len(rows) == 0:
                 break
-            rounds.append(self.score(observation, cloud, rows, cols, context, shape))
+            rounds.append(self.score(observation, cloud, rows, cols, images, shape))
         candidates = {key: np.concatenate([r[key] for r in rounds]) for key in rounds[0]}
         candidates["iteration"] = np.concatenate([np.full(len(r["q"]), i) for i, r in enumerate(rounds)])
         best = int(np.argmax(candidates["q"]))

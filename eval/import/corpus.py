@@ -16,6 +16,10 @@ Groups (--groups, comma-separated):
   pybullet   pybullet's pybullet_data (`pip install pybullet==3.2.7`): every OBJ/STL in it but
              the scenes (planes, terrain, a monastery, a stadium, a cloth sheet) and byte-identical
              copies, and of the 1000 random objects every 50th (20); 213 meshes
+  ply        every PLY in two robotics packages' wheels (`pip download mani-skill==3.0.1
+             rtb-data==2.0.0 --no-deps -d WHEELS`, then --wheels WHEELS): ManiSkill's SO-100 gripper
+             collision links, assembly-task parts, an apple in convex pieces and a scanned bowl;
+             the Robotics Toolbox's test mesh; 11 meshes
 
 The earlier measurement (94.4 %, 34 of 36) was synthetic + dm_control. A run of all three groups
 takes ~40 min on 2 cores (large CAD meshes decompose for minutes); eval/import/README.md has the
@@ -34,6 +38,7 @@ import sys
 import tempfile
 import time
 import xml.etree.ElementTree as ET
+import zipfile
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
@@ -100,6 +105,33 @@ def pybullet_meshes() -> list[tuple[str, Path, dict]]:
         for scale in sorted(scales.get(path.resolve(), {1.0})):
             label = f"pybullet/{rel}" + ("" if scale == 1.0 else f"@{scale:g}")
             out.append((label, path, {} if scale == 1.0 else {"scale": scale}))
+    return out
+
+
+PLY_WHEELS = ("mani_skill-3.0.1-py3-none-any.whl", "rtb_data-2.0.0-py3-none-any.whl")
+"""The wheels the "ply" group reads (`pip download mani-skill==3.0.1 rtb-data==2.0.0 --no-deps`)."""
+
+
+def ply_meshes(folder: Path, wheels: Path | None) -> list[tuple[str, Path, dict]]:
+    """Every PLY of the `PLY_WHEELS` in `wheels`, at the scales their URDF/SDF files declare."""
+    out = []
+    for wheel in PLY_WHEELS:
+        path = (wheels or Path(".")) / wheel
+        if not path.is_file():
+            raise SystemExit(f"--wheels {wheels}: no {wheel} (pip download mani-skill==3.0.1 rtb-data==2.0.0 "
+                             "--no-deps -d DIR)")
+        root = folder / path.stem
+        with zipfile.ZipFile(path) as archive:
+            for member in archive.namelist():
+                if member.lower().endswith((".ply", ".urdf", ".sdf")):
+                    archive.extract(member, root)
+        scales = declared_scales(root)
+        package = wheel.split("-")[0]
+        for mesh in sorted(p for p in root.rglob("*") if p.suffix.lower() == ".ply"):
+            rel = mesh.relative_to(root).as_posix()
+            for scale in sorted(scales.get(mesh.resolve(), {1.0})):
+                label = f"ply/{package}/{rel}" + ("" if scale == 1.0 else f"@{scale:g}")
+                out.append((label, mesh, {} if scale == 1.0 else {"scale": scale}))
     return out
 
 
@@ -181,6 +213,7 @@ def main() -> None:
     parser.add_argument("--failed-in", type=Path, help="only the meshes this results file has as failed, of the "
                         "causes matching --causes")
     parser.add_argument("--causes", default="", help="regex on the failure causes (with --failed-in)")
+    parser.add_argument("--wheels", type=Path, help="folder holding the PLY_WHEELS (the ply group)")
     parser.add_argument("--timeout", type=float, default=300.0)
     parser.add_argument("--out", type=Path, help="JSON file with every mesh's outcome")
     parser.add_argument("--merge", type=Path, nargs="+", help="merge these result files (shards) into --out")
@@ -200,6 +233,7 @@ def main() -> None:
         "synthetic": lambda: synthetic(folder / "synthetic"),
         "dm_control": dm_control_meshes,
         "pybullet": pybullet_meshes,
+        "ply": lambda: ply_meshes(folder / "ply", args.wheels),
     }
     cases = [case for group in args.groups.split(",") for case in makers[group]()]
     cases = [c for c in cases if re.search(args.only, c[0])]

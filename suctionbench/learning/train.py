@@ -86,7 +86,7 @@ from suctionbench.learning.models import (
     pose_dim_of,
 )
 from suctionbench.sensing.object_context import OBJECT_CONTEXT_COLUMNS
-from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN
+from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN, ThumbnailConfig
 
 PR_CURVE_NAME = "precision_recall.png"
 
@@ -624,11 +624,15 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
         session.restore(saved)
         resumed_from = session.epoch
 
-    images_input = ("(N, 32, 32) float32 depth thumbnails in metres, grasp at the centre, approach's image "
-                    "pointing down the middle column")
+    summary = _dataset_summary(dataset_dir, card, config.split, train_data, val_data)
+    thumbnail = ThumbnailConfig.from_dict(summary["thumbnail"], f"dataset '{dataset_dir}'")
+    grasp = f"{thumbnail.crop_size} px crop" + (f", {thumbnail.block} x {thumbnail.block} block means"
+                                                  if thumbnail.sampling == "mean" else "")
+    images_input = (f"(N, 32, 32) float32 depth thumbnails in metres ({grasp}), grasp at the centre, approach's "
+                    "image pointing down the middle column")
     if channels == 2:
-        images_input = ("(N, 2, 32, 32) float32 depth thumbnails in metres: channel 0 the grasp thumbnail (96 px "
-                        "crop), channel 1 the context thumbnail (288 px crop, 9 x 9 block means), both with the "
+        images_input = (f"(N, 2, 32, 32) float32 depth thumbnails in metres: channel 0 the grasp thumbnail ({grasp}), "
+                        "channel 1 the context thumbnail (288 px crop, 9 x 9 block means), both with the "
                         "grasp at the centre and the approach's image pointing down the middle column")
     base_card = {
         "arch": config.arch, "parameters": count_parameters(network),
@@ -641,7 +645,7 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
         "output": "probability that the grasp succeeds: softmax of the logits, column 1",
         "label": {"metric": METRIC_FIELD, "threshold": threshold, "positive": "metric > threshold",
                   "target": config.target, "decision": f"q > {decision_threshold(config.target, threshold):g}"},
-        "dataset": _dataset_summary(dataset_dir, card, config.split, train_data, val_data),
+        "dataset": summary,
         "command": command if command is not None else shlex.join(sys.argv),
         "versions": versions(),
     }

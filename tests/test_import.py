@@ -740,3 +740,19 @@ def test_an_opening_is_not_rebuilt_and_says_how_undecided_the_inside_is():
     assert rebuilt is None and ambiguous > AMBIGUOUS_MAX
     with pytest.raises(InputError, match=r"not watertight: 1 hole.*leaves \d+% of the volume undecided"):
         solidify(cup, "cup")
+
+
+def test_a_convex_part_without_volume_is_left_out_not_a_crash():
+    # CoACD can hand back a stray triangle (3 distinct points, the same point repeated): it bounds no
+    # volume, so it has no convex hull (qhull needs 4 points off one plane). A 350-face random object
+    # of pybullet's hit it and failed with an internal QhullError; it is left out, and a run that
+    # returned only such parts counts as a failed run (the next threshold is tried).
+    from suctionbench.objects.build import _hulls
+    from suctionbench.objects.decompose import CoacdFailed
+
+    box = trimesh.creation.box((0.02, 0.03, 0.04))
+    triangle = (np.array([[0, 0, 0], [0.01, 0, 0], [0, 0.01, 0], [0, 0, 0]], float), np.array([[0, 1, 2], [3, 1, 2]]))
+    parts = _hulls([(np.asarray(box.vertices), np.asarray(box.faces)), triangle])
+    assert len(parts) == 1 and parts[0].volume == pytest.approx(0.02 * 0.03 * 0.04)
+    with pytest.raises(CoacdFailed, match="none of its 2 parts bounds a volume"):
+        _hulls([triangle, triangle])

@@ -177,8 +177,12 @@ def stable_poses(mesh: trimesh.Trimesh, com: np.ndarray) -> list[dict[str, Any]]
 def _hulls(raw: list[tuple[np.ndarray, np.ndarray]]) -> list[trimesh.Trimesh]:
     """CoACD's parts (`decompose.CoacdRun`: each run in a child process, so that a native crash
     raises CoacdFailed here) as convex hulls, which is how MuJoCo collides meshes, in a fixed order
-    (by centroid)."""
-    parts = [trimesh.Trimesh(v, f, process=True).convex_hull for v, f in raw]
+    (by centroid). A part of fewer than 4 distinct points (CoACD leaves a stray triangle now and
+    then) bounds no volume and has no hull: it is left out, and a run of nothing else failed."""
+    solid = [(v, f) for v, f in raw if len(np.unique(np.asarray(v, dtype=float), axis=0)) >= 4]
+    if not solid:
+        raise CoacdFailed(f"none of its {len(raw)} parts bounds a volume")
+    parts = [trimesh.Trimesh(v, f, process=True).convex_hull for v, f in solid]
     return sorted(parts, key=lambda p: tuple(np.round(p.centroid, 6)))
 
 

@@ -460,6 +460,15 @@ def unpinch(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
     return trimesh.Trimesh(vertices, np.asarray(mesh.faces), process=False)
 
 
+def _nearest_on_surface(mesh: trimesh.Trimesh, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Squared distance, face index and closest point on `mesh`'s surface of each point: libigl's
+    AABB tree, O(log faces) time and constant memory per point (see `gap`)."""
+    import igl
+
+    return igl.point_mesh_squared_distance(np.asarray(points, dtype=float), np.asarray(mesh.vertices, dtype=float),
+                                           np.asarray(mesh.faces, dtype=np.int64))
+
+
 def gap(a: trimesh.Trimesh, b: trimesh.Trimesh, limit: float) -> float:
     """Distance between the surfaces of `a` and `b` (closest vertex of either to the other's
     surface), or inf where their bounding boxes are more than `limit` apart.
@@ -468,8 +477,6 @@ def gap(a: trimesh.Trimesh, b: trimesh.Trimesh, limit: float) -> float:
     `closest_point` gathers every triangle whose box is near a point at once, 6.9 GB for the
     100 k vertices of a 86 k-face render mesh against another piece (a process the kernel kills,
     with no error line)."""
-    import igl
-
     if np.any(a.bounds[0] > b.bounds[1] + limit) or np.any(b.bounds[0] > a.bounds[1] + limit):
         return np.inf
     near = []
@@ -477,9 +484,7 @@ def gap(a: trimesh.Trimesh, b: trimesh.Trimesh, limit: float) -> float:
         points = np.asarray(x.vertices)
         inside = np.all((points >= y.bounds[0] - limit) & (points <= y.bounds[1] + limit), axis=1)
         if inside.any():
-            squared = igl.point_mesh_squared_distance(points[inside], np.asarray(y.vertices, dtype=float),
-                                                      np.asarray(y.faces, dtype=np.int64))[0]
-            near.append(float(np.sqrt(squared.min())))
+            near.append(float(np.sqrt(_nearest_on_surface(y, points[inside])[0].min())))
     return float(min(near)) if near else np.inf
 
 
@@ -491,10 +496,7 @@ def _snap(a: trimesh.Trimesh, b: trimesh.Trimesh, tolerance: float, depth: float
     idx = np.flatnonzero(inside)
     if len(idx) == 0:
         return a
-    import igl
-
-    squared, triangle, closest = igl.point_mesh_squared_distance(  # memory-bounded, as in `gap`
-        points[idx], np.asarray(b.vertices, dtype=float), np.asarray(b.faces, dtype=np.int64))
+    squared, triangle, closest = _nearest_on_surface(b, points[idx])
     distance = np.sqrt(squared)
     near = distance <= tolerance
     idx, closest, distance, triangle = idx[near], closest[near], distance[near], triangle[near]

@@ -403,9 +403,8 @@ class GQCNNPolicy:
         pixels, points, approaches = cloud.grasps_at(rows, cols)
         _, depths, angles = project_grasps(points, approaches, cloud.intrinsics)
         views = self.images(observation) if images is None else images
-        thumbnails = np.stack([extract_thumbnails(image, pixels, angles, view) for view, image in views], axis=1)
-        if len(views) == 1:
-            thumbnails = thumbnails[:, 0]
+        channels = [extract_thumbnails(image, pixels, angles, view) for view, image in views]
+        thumbnails = channels[0] if len(channels) == 1 else np.stack(channels, axis=1)
         poses = network_poses(self.model, observation, cloud, depths, points, approaches,
                               self.config.sampler.table_height, shape)
         q = np.asarray(self.model.predict(thumbnails, poses), dtype=float).reshape(-1)

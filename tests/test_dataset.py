@@ -361,25 +361,32 @@ def test_a_dataset_in_the_sensors_noise_says_so_and_paper_datasets_keep_their_fi
     assert not (tmp_path / "k").exists()  # refused before anything is written
 
 
-def test_block_mean_thumbnails_change_only_the_grasp_thumbnails_of_a_dataset(reference, tmp_path):
-    # The sampling decides only how the grasp thumbnail reads the noisy image: the images, grasps,
-    # labels and context thumbnails draw the same random numbers, so they are equal bit for bit; the
-    # grasp thumbnails are each 3 x 3 block's mean instead of its centre, which on the (smooth)
-    # object surfaces differ by about the noise the mean removes (a few mm at most), not by the
-    # object's depth relief.
+@pytest.mark.parametrize("change", [{"sampling": "mean"}, {"crop_size": 64}], ids=["block-means", "crop-64"])
+def test_grasp_thumbnail_options_change_only_the_grasp_thumbnails_of_a_dataset(reference, tmp_path, change):
+    # The sampling and the crop decide only how the grasp thumbnail reads the noisy image: the
+    # images, grasps, labels and context thumbnails draw the same random numbers, so they are equal
+    # bit for bit. Block means instead of each 3 x 3 block's centre differ, on the (smooth) object
+    # surfaces, by about the noise the mean removes (a few mm at most), not by the object's depth
+    # relief. A 64 px crop samples every 2nd image pixel instead of every 3rd: its four central
+    # pixels lie 1 px from the grasp pixel (diagonally) instead of 1.5 px, so their mean is the
+    # surface's depth at the grasp either way, within the noise and a few mm of slope.
     import dataclasses
 
     from suctionbench.config import to_dict
     from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN
 
-    mean = dataclasses.replace(THUMBNAIL_GQCNN, sampling="mean")
+    thumbnail = dataclasses.replace(THUMBNAIL_GQCNN, **change)
     records = [load_object(k) for k in KEYS]
-    card = gen.generate_dataset(tmp_path / "mean", [str(r.directory) for r in records], KEYS, "primesense",
-                                dataclasses.replace(CONFIG, thumbnail=mean))
-    assert card["config"]["thumbnail"] == to_dict(mean) and card["fingerprint"] != read_card(reference)["fingerprint"]
-    a, b = DatasetReader(reference).shard(0), DatasetReader(tmp_path / "mean").shard(0)
+    card = gen.generate_dataset(tmp_path / "other", [str(r.directory) for r in records], KEYS, "primesense",
+                                dataclasses.replace(CONFIG, thumbnail=thumbnail))
+    assert card["config"]["thumbnail"] == to_dict(thumbnail)
+    assert card["fingerprint"] != read_card(reference)["fingerprint"]
+    a, b = DatasetReader(reference).shard(0), DatasetReader(tmp_path / "other").shard(0)
     for field in ("context_ims_tf_table", "robust_suction_wrench_resistance", "hand_poses", "object_context"):
         np.testing.assert_array_equal(a[field], b[field])
-    point, block = a["depth_ims_tf_table"], b["depth_ims_tf_table"]
-    assert not np.array_equal(point, block)
-    assert np.median(np.abs(point - block)) < 0.005 < np.ptp(point[0])
+    before, after = a["depth_ims_tf_table"], b["depth_ims_tf_table"]
+    assert not np.array_equal(before, after)
+    if "sampling" in change:
+        assert np.median(np.abs(before - after)) < 0.005 < np.ptp(before[0])
+    centre = (slice(None), slice(15, 17), slice(15, 17))
+    assert np.median(np.abs(before[centre].mean(axis=(1, 2)) - after[centre].mean(axis=(1, 2)))) < 0.005

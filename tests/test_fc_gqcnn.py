@@ -86,12 +86,14 @@ def test_dense_q_is_the_network_on_each_pixels_window():
     assert action.q == pytest.approx(float(dense["q"].max()))
 
 
-@pytest.mark.parametrize("sampling", ["point", "mean"])
-def test_dense_q_of_a_context_net_reads_both_lattices(sampling):
+@pytest.mark.parametrize("change", [{"sampling": "point"}, {"sampling": "mean"}, {"crop_size": 64}],
+                         ids=["point", "mean", "crop-64"])
+def test_dense_q_of_a_context_net_reads_both_lattices(change):
     # A two-stream (context) net: each pixel's dense q is the network's on the pair (grasp thumbnail
-    # centred on its 3-px-lattice window, context thumbnail centred on its 9-px-lattice window of
-    # the box-filtered image), both at the bin's angle, with the pixel's own pose; the grasp lattice
-    # reads the image as the model's dataset did (point samples, or 3 x 3 block means).
+    # centred on its 3-px-lattice window, 2 px for a 64 px crop, context thumbnail centred on its
+    # 9-px-lattice window of the box-filtered image), both at the bin's angle, with the pixel's own
+    # pose; the grasp lattice reads the image as the model's dataset did (point samples, 3 x 3
+    # block means, or a 64 px crop).
     from suctionbench.config import to_dict
     from suctionbench.learning.checkpoint import GQCNNModel
     from suctionbench.learning.data import NormStats
@@ -99,11 +101,11 @@ def test_dense_q_of_a_context_net_reads_both_lattices(sampling):
     from suctionbench.sensing.thumbnails import THUMBNAIL_CONTEXT, extract_context_thumbnails, sample_thumbnails
 
     stats = NormStats((0.57, 0.59), (0.02, 0.01), (0.57, 0.2), (0.02, 0.1), count=1)
-    thumbnail = dataclasses.replace(THUMBNAIL_GQCNN, sampling=sampling)
+    thumbnail = dataclasses.replace(THUMBNAIL_GQCNN, **change)
     model = GQCNNModel(build_model("context", torch.Generator().manual_seed(2)), stats,
                        {"arch": "context", "dataset": {"thumbnail": to_dict(thumbnail)}})
     _, observation, dense, pick, turn, (grasp, context) = _dense_windows(
-        model, [THUMBNAIL_GQCNN, THUMBNAIL_CONTEXT], 40, 1)
+        model, [thumbnail, THUMBNAIL_CONTEXT], 40, 1)
     off = np.linalg.norm(context - dense["pixels"][pick], axis=1)
     assert off.max() <= 9 * math.sqrt(2) / 2 + 1e-9  # half the context lattice's diagonal
     pairs = np.stack([sample_thumbnails(observation.depth, grasp, turn, thumbnail),

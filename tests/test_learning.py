@@ -30,7 +30,7 @@ from suctionbench.learning.data import (
     augment,
     symmetrize,
 )
-from suctionbench.learning.metrics import average_precision, precision_recall_curve
+from suctionbench.learning.metrics import average_precision, precision_recall_curve, top_grasp_success
 from suctionbench.learning.models import (
     LRN_ALPHA_TF,
     LRN_BETA,
@@ -469,6 +469,22 @@ def test_average_precision_by_hand():
     assert math.isnan(average_precision(np.zeros(3), np.ones(3)))
 
 
+def test_top_grasp_success_by_hand():
+    # image 7: top score 0.9 is a negative -> 0; image 3: top 0.8 shared by a positive and a negative
+    # (a tie, picked at random) -> 0.5; image 5 has one grasp, nothing to rank: left out.
+    groups = np.array([7, 7, 7, 3, 3, 3, 5])
+    labels = np.array([0, 1, 1, 1, 0, 0, 1])
+    scores = np.array([0.9, 0.2, 0.8, 0.8, 0.8, 0.1, 0.99])
+    got = top_grasp_success(labels, scores, groups)
+    assert got["images"] == 2
+    assert got["top_grasp_success"] == pytest.approx((0 + 0.5) / 2)
+    assert got["top_grasp_ceiling"] == 1.0  # both images hold a positive grasp
+    assert got["top_grasp_random"] == pytest.approx((2 / 3 + 1 / 3) / 2)
+    # a perfect ranking reaches the ceiling
+    assert top_grasp_success(labels, labels + 0.1 * np.arange(7) / 7, groups)["top_grasp_success"] == 1.0
+    assert math.isnan(top_grasp_success(labels[:1], scores[:1], groups[:1])["top_grasp_success"])
+
+
 # ----------------------------------------------------------------------------------------------
 # training
 
@@ -789,6 +805,8 @@ def test_cli_train_and_show(dataset, tmp_path):
     assert scored["datapoints"] == len(read_split(dataset, "image_wise", "val")) and scored["target"] == "binary"
     assert scored["decision_threshold"] == 0.5 and scored["accuracy"] == scored["accuracy_at_half"]
     assert 0.0 <= scored["accuracy"] <= 1.0 and 0.0 < scored["positive_rate"] < 1.0
+    # each synthetic datapoint is an image of its own: no image has two grasps to rank
+    assert scored["images"] == 0 and scored["top_grasp_success"] is None
     result = runner.invoke(app, ["model", "score", str(out), "--dataset", str(dataset), "--part", "test", "--json"])
     assert result.exit_code == 2 and "split part 'test'" in json.loads(result.stdout.strip().splitlines()[-1])["error"]
 

@@ -375,10 +375,13 @@ def test_cem_feeds_a_two_channel_model_the_grasp_and_context_thumbnails():
     assert not np.allclose(images[:, 0], images[:, 1], atol=1e-3)
 
 
-def test_cem_plans_with_a_trained_format_context_model(tmp_path):
+@pytest.mark.parametrize("thumbnail", [ThumbnailConfig(sampling="mean"), ThumbnailConfig(crop_size=64)],
+                         ids=["block-means", "crop-64"])
+def test_cem_plans_with_a_trained_format_context_model(tmp_path, thumbnail):
     """A `context` network saved and loaded as a model directory (lazily, as `make_policy` does) plans
     a grasp on the object; its q is the network's for the two thumbnails of that grasp, the grasp
-    thumbnail sampled as its card says its dataset was (here block means, not gqcnn's point samples)."""
+    thumbnail cut as its card says its dataset was (block means or a 64 px crop, not gqcnn's 96 px
+    of point samples)."""
     import torch
 
     from suctionbench.learning.checkpoint import GQCNNModel, load_model, save_model
@@ -386,10 +389,9 @@ def test_cem_plans_with_a_trained_format_context_model(tmp_path):
     from suctionbench.learning.models import build_model
 
     stats = NormStats((0.57, 0.59), (0.02, 0.01), (0.57, 0.2), (0.02, 0.1), count=1)
-    mean = ThumbnailConfig(sampling="mean")
     save_model(tmp_path, GQCNNModel(build_model("context", torch.Generator().manual_seed(0)), stats,
-                                    {"arch": "context", "dataset": {"thumbnail": to_dict(mean)}}))
-    assert load_model(tmp_path).thumbnail == mean
+                                    {"arch": "context", "dataset": {"thumbnail": to_dict(thumbnail)}}))
+    assert load_model(tmp_path).thumbnail == thumbnail
     policy = make_policy("gqcnn", model=tmp_path, num_seed_samples=30, num_gmm_samples=10, num_iters=1)
     observation = dome_observation()
     action = policy.plan(observation, np.random.default_rng(1))
@@ -400,7 +402,7 @@ def test_cem_plans_with_a_trained_format_context_model(tmp_path):
     best = action.info["chosen"]
     pixels, points, approaches = (action.candidates[k][best:best + 1] for k in ("pixels", "points", "approaches"))
     _, _, angles = project_grasps(points, approaches, PRIMESENSE)
-    both = np.stack([sample_thumbnails(observation.depth, pixels, angles, mean),
+    both = np.stack([sample_thumbnails(observation.depth, pixels, angles, thumbnail),
                      extract_context_thumbnails(observation.depth, pixels, angles)], axis=1)
     q = load_model(tmp_path).predict(both, action.candidates["poses"][best:best + 1])
     assert float(q[0]) == pytest.approx(action.q, rel=1e-6)

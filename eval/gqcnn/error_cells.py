@@ -30,9 +30,7 @@ def main(model_dir: Path, dataset: Path, count: int, seed: int) -> None:
     data = model.split_data(dataset, "object_wise", "val", max_datapoints=count, subset_rng=np.random.default_rng(seed))
     scored = score_model(model, data, threshold)  # scores and labels in index order: shard by shard, row by row
     q, label, cut = scored["scores"], scored["labels"] == 1, scored["decision_threshold"]
-    flags = [data.reader.shard(shard, fields=["seal_flags", "wrench_resistance"]) for shard in data.shards]
-    seal, resists = (np.concatenate([f[name][data.rows(shard)] for f, shard in zip(flags, data.shards, strict=True)])
-                     for name in ("seal_flags", "wrench_resistance"))
+    seal, resists = data.values("seal_flags"), data.values("wrench_resistance")
     wrong = (q > cut) != label
     print(f"{model_dir} on {dataset} (object_wise/val, {len(q)} datapoints): accuracy {scored['accuracy']:.4f} "
           f"at q > {cut:g}, {scored['accuracy_at_half']:.4f} at q > 0.5")

@@ -59,6 +59,9 @@ def generate(
     thumbnail_sampling: Annotated[str, typer.Option(help="What a grasp thumbnail pixel holds: point (the depth at "
                                                          "its 3 x 3 block's centre, gqcnn's) or mean (the block's "
                                                          "mean depth).")] = "point",
+    thumbnail_crop: Annotated[int, typer.Option(help="Image pixels the 32 x 32 grasp thumbnail spans (gqcnn's 96: "
+                                                     "3 image pixels a thumbnail pixel; 64 or 32 see the cup's "
+                                                     "~13 px footprint finer, in a smaller field).")] = 96,
     proposals: Annotated[Path | None, typer.Option(help="A trained model's directory: label its dense policy's best "
                                                        "grasps on every image too (on-policy data).")] = None,
     proposals_per_image: Annotated[int, typer.Option(help="With --proposals: the policy's best grasps per image "
@@ -89,7 +92,7 @@ def generate(
         config = GenerationConfig(
             datapoints=datapoints, seed=seed, grasps_per_object=grasps_per_object,
             label=label, scene=scene, noise_model=noise,
-            thumbnail=dataclasses.replace(THUMBNAIL_GQCNN, sampling=thumbnail_sampling),
+            thumbnail=dataclasses.replace(THUMBNAIL_GQCNN, crop_size=thumbnail_crop, sampling=thumbnail_sampling),
             proposals=None if proposals is None else str(proposals.resolve()),
             proposals_per_image=proposals_per_image,
         )

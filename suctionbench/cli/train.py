@@ -157,12 +157,15 @@ def model_score(
     dataset: Annotated[Path, typer.Option(help="Dataset directory to score it on (from `suctionbench generate`).")],
     split: Annotated[str, typer.Option(help="Split: image_wise or object_wise.")] = "object_wise",
     part: Annotated[str, typer.Option(help="Side of the split: val (held out) or train.")] = "val",
-    max_datapoints: Annotated[int | None, typer.Option(help="Score a random subset of this many.")] = None,
+    max_datapoints: Annotated[int | None, typer.Option(help="Score a random subset of this many (it thins each "
+                                                            "image's grasps, and so the top-grasp figures).")] = None,
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
     """Held-out accuracy and AP of a trained model on a dataset's split, against the dataset's own
-    label (metric > its threshold): the training run's figures, recomputed for any model and data."""
+    label (metric > its threshold): the training run's figures, recomputed for any model and data.
+    Beside them, what the policies act on: the label of each image's highest-q grasp
+    (`learning.metrics.top_grasp_success`), with its ceiling and a random pick's."""
 
     def body() -> dict[str, Any]:
         import numpy as np
@@ -170,6 +173,7 @@ def model_score(
         from suctionbench.dataset.storage import read_card
         from suctionbench.learning.checkpoint import load_model
         from suctionbench.learning.data import label_threshold
+        from suctionbench.learning.metrics import top_grasp_success
         from suctionbench.learning.train import score_model
 
         model = load_model(directory)
@@ -182,6 +186,7 @@ def model_score(
                   "decision_threshold": scored["decision_threshold"], "accuracy": scored["accuracy"],
                   "accuracy_at_half": scored["accuracy_at_half"], "ap": scored["ap"],
                   "positive_rate": scored["positive_rate"], "loss": scored["loss"]}
+        result.update(top_grasp_success(scored["labels"], scored["scores"], data.values("image_labels")))
         if not as_json:
             print_kv(str(directory), result)
         return result

@@ -460,6 +460,12 @@ class SplitData:
         for reading other fields of the same datapoints (`reader.shard(shard, fields=...)[name][rows]`)."""
         return self._local[shard]
 
+    def values(self, name: str) -> np.ndarray:
+        """Field `name` of the split's datapoints, in index order (the order `batches` streams them
+        unshuffled and `evaluate` scores them): e.g. their image ids or seal flags beside the scores."""
+        parts = [self.reader.shard(shard, fields=[name])[name][self.rows(shard)] for shard in self.shards]
+        return np.concatenate(parts) if parts else np.zeros(0)
+
     def subset(self, count: int, rng: np.random.Generator) -> SplitData:
         """At most `count` of this split's datapoints, sharing its reader: its datapoints in whole
         shards taken in a random order (drawn with `rng`), the last one cut to make up the count.

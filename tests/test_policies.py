@@ -410,6 +410,38 @@ def test_cem_plans_with_a_trained_format_context_model(tmp_path, thumbnail):
     assert float(load_model(tmp_path).predict(points, action.candidates["poses"][best:best + 1])[0]) != action.q
 
 
+def slope_observation(slope_deg: float, height: float = 0.6) -> Observation:
+    """Straight-down view of a table (depth `height`) with a 10 x 10 cm patch of plane whose normal
+    is `slope_deg` from the optical axis, turned about the camera's y axis: z = z0 + tan(s) x, i.e.
+    at pixel u the depth z0 / (1 - tan(s) (u - cx) / fx)."""
+    pose = np.eye(4)
+    pose[:3, :3] = np.diag([1.0, -1.0, -1.0])
+    pose[2, 3] = height
+    v, u = np.mgrid[: PRIMESENSE.height, : PRIMESENSE.width]
+    patch = (abs(u - PRIMESENSE.cx) < 40) & (abs(v - PRIMESENSE.cy) < 40)
+    plane = 0.5 / (1.0 - math.tan(math.radians(slope_deg)) * (u - PRIMESENSE.cx) / PRIMESENSE.fx)
+    return Observation(np.where(patch, plane, height).astype(np.float32), PRIMESENSE, pose)
+
+
+@pytest.mark.parametrize("name", ["planarity-centroid", "gqcnn"])
+def test_a_table_option_widens_the_seed_cone(name):
+    # A face 45 deg from the optical axis lies outside gqcnn's 30 deg seed cone: the sampler finds
+    # no valid pixel and drops its angle limits (relaxed). `sampler={max_optical_axis_angle=...}`
+    # (a --policy-arg table) widens the cone to 60 deg and keeps the sampler's other defaults: the
+    # face's pixels are valid and every candidate approaches ~45 deg from the optical axis (the
+    # normal of a plane, up to the 1 px smoothing at the patch's rim).
+    kwargs = {"model": CentreDepthStub(z_best=0.5, scale=0.01)} if name == "gqcnn" else {}
+    observation = slope_observation(45.0)
+    narrow = make_policy(name, **kwargs).plan(observation, np.random.default_rng(0))
+    wide_policy = make_policy(name, sampler={"max_optical_axis_angle": math.radians(60)}, **kwargs)
+    assert wide_policy.config.sampler == SamplerConfig(max_optical_axis_angle=math.radians(60))
+    wide = wide_policy.plan(observation, np.random.default_rng(0))
+    assert narrow.info["relaxed"] and not wide.info["relaxed"]
+    assert abs(math.degrees(math.acos(abs(wide.approach[2]))) - 45.0) < 3.0
+    with pytest.raises(InputError, match="sampler"):
+        make_policy(name, sampler={"cone": 1.0}, **kwargs)
+
+
 # --------------------------------------------------------------------------------------------------
 # Determinism and registry
 # --------------------------------------------------------------------------------------------------

@@ -37,6 +37,7 @@ Geometry read from the image (`SceneCloud`)
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -196,6 +197,23 @@ def policy_factory(name: str) -> Callable[..., Policy]:
     from suctionbench.policies.plugins import resolve_factory
 
     return resolve_factory(name)
+
+
+def configured(config: Any, overrides: dict[str, Any]) -> Any:
+    """`config` (a policy's config dataclass) with `overrides` (its keyword options, e.g. from
+    ``--policy-arg``) replaced. An option given as a table for a field that is itself a config
+    replaces that config's own fields: ``--policy-arg 'sampler={max_optical_axis_angle=1.0472}'``
+    widens the seed cone and keeps the sampler's other defaults. Unknown names raise TypeError,
+    as `dataclasses.replace` does (`load_policy` reports it as bad options)."""
+    changes = dict(overrides)
+    for key, value in overrides.items():
+        current = getattr(config, key, None)
+        if isinstance(value, dict) and dataclasses.is_dataclass(current):
+            try:
+                changes[key] = dataclasses.replace(current, **value)
+            except TypeError as exc:
+                raise TypeError(f"{key}: {exc}") from None
+    return dataclasses.replace(config, **changes)
 
 
 def make_policy(name: str, **kwargs: Any) -> Policy:

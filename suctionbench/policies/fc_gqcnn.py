@@ -33,7 +33,6 @@ the same the CEM policy reads; `make_fc_gqcnn_policy()` loads the shipped one.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -44,7 +43,7 @@ import numpy as np
 from scipy import ndimage
 
 from suctionbench.errors import InputError
-from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, scene_cloud
+from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, configured, scene_cloud
 from suctionbench.policies.gqcnn import (
     CEMConfig,
     GQCNNPolicy,
@@ -135,7 +134,7 @@ class FCGQCNNPolicy:
 
     def __init__(self, model: Any, config: DenseConfig | None = None, **overrides: Any) -> None:
         self.model = model
-        self.config = dataclasses.replace(config or DenseConfig(), **overrides)
+        self.config = configured(config or DenseConfig(), overrides)
         cfg = self.config
         self.exact = GQCNNPolicy(model, CEMConfig(thumbnail=cfg.thumbnail, context_thumbnail=cfg.context_thumbnail,
                                                   sampler=cfg.sampler))

@@ -48,7 +48,6 @@ model directory is given.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -58,7 +57,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from suctionbench.errors import InputError
-from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, SceneCloud, scene_cloud
+from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, SceneCloud, configured, scene_cloud
 from suctionbench.policies.plugins import builtin_name
 from suctionbench.resources import asset_path
 from suctionbench.sensing.object_context import ObjectShape, object_context
@@ -375,7 +374,7 @@ class GQCNNPolicy:
         if not callable(getattr(model, "predict", None)):
             raise InputError(f"GQ-CNN policy: model {model!r} has no predict(images, poses) method")
         self.model = model
-        self.config = dataclasses.replace(config or CEMConfig(), **overrides)
+        self.config = configured(config or CEMConfig(), overrides)
 
     def __repr__(self) -> str:
         return f"GQCNNPolicy({self.model!r}, {self.config})"

@@ -29,7 +29,6 @@ highest q (the first one on ties).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -39,7 +38,15 @@ import numpy as np
 
 from suctionbench.config import CUP_DEFAULT
 from suctionbench.errors import InputError
-from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, SceneCloud, disc_errors, scene_cloud
+from suctionbench.policies.base import (
+    GraspAction,
+    Observation,
+    SamplerConfig,
+    SceneCloud,
+    configured,
+    disc_errors,
+    scene_cloud,
+)
 
 
 @dataclass(frozen=True)
@@ -99,7 +106,7 @@ class _HeuristicPolicy:
     name: ClassVar[str]
 
     def __init__(self, config: HeuristicConfig | None = None, **overrides: Any) -> None:
-        self.config = dataclasses.replace(config or HeuristicConfig(), **overrides)
+        self.config = configured(config or HeuristicConfig(), overrides)
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.config})"

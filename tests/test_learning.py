@@ -807,6 +807,16 @@ def test_cli_train_and_show(dataset, tmp_path):
     assert 0.0 <= scored["accuracy"] <= 1.0 and 0.0 < scored["positive_rate"] < 1.0
     # each synthetic datapoint is an image of its own: no image has two grasps to rank
     assert scored["images"] == 0 and scored["top_grasp_success"] is None
+    # a dataset whose grasp thumbnails were cut otherwise (48 px crops) is refused, not scored
+    other = tmp_path / "cut48"
+    shutil.copytree(dataset, other)
+    card_path = other / "config.json"
+    card = json.loads(card_path.read_text())
+    card["config"]["thumbnail"] = {"crop_size": 48, "out_size": 32, "sampling": "point"}
+    card_path.write_text(json.dumps(card))
+    result = runner.invoke(app, ["model", "score", str(out), "--dataset", str(other), "--json"])
+    error = json.loads(result.stdout.strip().splitlines()[-1])["error"]
+    assert result.exit_code == 2 and "48 px crops" in error and "96 px crops" in error
     result = runner.invoke(app, ["model", "score", str(out), "--dataset", str(dataset), "--part", "test", "--json"])
     assert result.exit_code == 2 and "split part 'test'" in json.loads(result.stdout.strip().splitlines()[-1])["error"]
 

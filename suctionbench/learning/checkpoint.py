@@ -28,9 +28,9 @@ import torch
 
 from suctionbench.errors import InputError
 from suctionbench.io import atomic_path, file_digest, json_safe, read_json  # noqa: F401  (json_safe: used by train.py)
-from suctionbench.learning.data import NormStats, SplitData
+from suctionbench.learning.data import NormStats, SplitData, dataset_thumbnail
 from suctionbench.learning.models import IMAGE_SIZE, build_model
-from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN, ThumbnailConfig
+from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN, ThumbnailConfig, describe_thumbnail
 
 WEIGHTS_NAME = "model.safetensors"
 CARD_NAME = "model.json"
@@ -101,7 +101,16 @@ class GQCNNModel:
 
     def split_data(self, dataset: str | Path, kind: str, part: str, **options: Any) -> SplitData:
         """One side of a dataset's split, read as this network reads it (its image channels, the
-        object context if its poses carry it); `options` as `SplitData`'s (e.g. `max_datapoints`)."""
+        object context if its poses carry it); `options` as `SplitData`'s (e.g. `max_datapoints`).
+        InputError if the dataset cut its grasp thumbnails otherwise than the network's were cut
+        (`thumbnail`): a 96 px model shown 48 px crops scores images it never saw the like of."""
+        from suctionbench.dataset.storage import read_card
+
+        cut = dataset_thumbnail(read_card(dataset), f"dataset '{dataset}'")
+        if cut != self.thumbnail:
+            raise InputError(f"dataset '{dataset}': its grasp thumbnails are {describe_thumbnail(cut)}, the "
+                             f"model's were {describe_thumbnail(self.thumbnail)}; its scores there would mean "
+                             "nothing (score it on a dataset cut as it was trained on)")
         return SplitData(dataset, kind, part, image_channels=self.image_channels, object_context=self.pose_dim > 2,
                          **options)
 

@@ -97,6 +97,7 @@ import torch
 from suctionbench.dataset.storage import DatasetReader, read_split
 from suctionbench.errors import InputError
 from suctionbench.sensing.noise import DepthNoiseConfig, apply_depth_noise_torch
+from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN, ThumbnailConfig
 
 IMAGE_FIELD = "depth_ims_tf_table"
 """Dataset field with the depth thumbnails (n, 32, 32, 1), metres."""
@@ -333,6 +334,14 @@ def label_threshold(card: dict[str, Any]) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
         raise InputError(f"dataset card: config.label_threshold {value!r} is not a number")
     return float(value)
+
+
+def dataset_thumbnail(card: dict[str, Any], source: str) -> ThumbnailConfig:
+    """How the dataset cut its grasp thumbnails: ``card["config"]["thumbnail"]``, else gqcnn's
+    (datasets from before the choice existed); InputError naming `source` if it is not a config."""
+    config = card.get("config") if isinstance(card.get("config"), dict) else {}
+    recorded = config.get("thumbnail")
+    return THUMBNAIL_GQCNN if recorded is None else ThumbnailConfig.from_dict(recorded, source)
 
 
 # -- moments ---------------------------------------------------------------------------------------

@@ -70,6 +70,7 @@ from suctionbench.learning.data import (
     NormStats,
     SplitData,
     augment,
+    dataset_thumbnail,
     label_threshold,
     labels_of,
     to_tensors,
@@ -86,7 +87,7 @@ from suctionbench.learning.models import (
     pose_dim_of,
 )
 from suctionbench.sensing.object_context import OBJECT_CONTEXT_COLUMNS
-from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN, ThumbnailConfig
+from suctionbench.sensing.thumbnails import ThumbnailConfig
 
 PR_CURVE_NAME = "precision_recall.png"
 
@@ -399,7 +400,7 @@ def _dataset_summary(directory: Path, card: dict[str, Any], split: str, train_da
         "path": str(directory.resolve()), "fingerprint": card.get("fingerprint"), "datapoints": card.get("datapoints"),
         "positive_rate": card.get("positive_rate"), "camera": card.get("camera"),
         "cup": card.get("cup", label.get("cup")), "noise_model": config.get("noise_model", "paper"),
-        "noise": config.get("noise"), "thumbnail": config.get("thumbnail", to_dict(THUMBNAIL_GQCNN)),
+        "noise": config.get("noise"), "thumbnail": to_dict(dataset_thumbnail(card, f"dataset '{directory}'")),
         "seed": config.get("seed"),
         "objects": len(card.get("objects", [])) if isinstance(card.get("objects"), list) else None,
         "split": split, "num_train": train_data.num_datapoints, "num_val": val_data.num_datapoints,

@@ -97,6 +97,11 @@ class ThumbnailConfig:
         return self.crop_size / 2.0 * math.sqrt(2.0)
 
 
+def describe_thumbnail(config: ThumbnailConfig) -> str:
+    """A thumbnail config in words, for messages: e.g. "96 px crops at 32 x 32, point samples"."""
+    return f"{config.crop_size} px crops at {config.out_size} x {config.out_size}, {config.sampling} samples"
+
+
 SAMPLINGS = ("point", "mean")
 """What `ThumbnailConfig.sampling` accepts."""
 

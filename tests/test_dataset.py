@@ -237,6 +237,9 @@ def test_dataset_show_reports_generation_time_and_size(reference):
     assert shown["generation_bytes"] == generation["bytes"] > 0
     assert shown["generation_recorded_seconds"] == generation["recorded_seconds"] > 0
     assert shown["generation_untimed_units"] == 0
+    # what a model trained on it will read: the image noise and how the grasp thumbnails were cut
+    assert shown["noise"] == read_card(reference)["config"].get("noise_model", "paper")
+    assert shown["grasp_thumbnail"] == "96 px crops at 32 x 32, point samples"
 
 
 def test_a_passed_check_is_trusted_until_a_file_changes(reference, tmp_path, monkeypatch):

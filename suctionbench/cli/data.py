@@ -15,6 +15,7 @@ from suctionbench.cli.common import (
     SeedOpt,
     app,
     dataset_app,
+    print_kv,
     print_rows,
     progress_bar,
     resolve_workers,
@@ -123,21 +124,25 @@ def dataset_show(
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
-    """Counts, positive rate, camera and objects of a dataset; optionally a thumbnail sheet."""
+    """Counts, positive rate, camera, image noise, grasp-thumbnail cut and objects of a dataset;
+    optionally a thumbnail sheet."""
 
     def body() -> dict[str, Any]:
         from suctionbench.dataset.storage import DatasetReader, read_card
         from suctionbench.dataset.verify import check_dataset, record_check
-        from suctionbench.learning.data import label_threshold
+        from suctionbench.learning.data import dataset_thumbnail, label_threshold
+        from suctionbench.sensing.thumbnails import describe_thumbnail
 
         checked = check_dataset(directory)  # manifests, hashes, shapes, finite labels, splits: else exit 2
         card = read_card(directory)
         reader = DatasetReader(directory)
+        config = card.get("config") if isinstance(card.get("config"), dict) else {}
         summary = {
             "datapoints": reader.num_datapoints, "shards": reader.num_shards,
             "positive_rate": card.get("positive_rate"), "camera": card.get("camera", {}).get("name"),
             "objects": len(card.get("objects", [])), "status": card.get("status"),
-            "threshold": label_threshold(card),
+            "threshold": label_threshold(card), "noise": config.get("noise_model", "paper"),
+            "grasp_thumbnail": describe_thumbnail(dataset_thumbnail(card, f"dataset '{directory}'")),
         }
         generation = card.get("generation") or {}  # time and size (datasets generated since it was recorded)
         summary.update({f"generation_{key}": generation.get(key) for key in
@@ -155,7 +160,7 @@ def dataset_show(
             summary["thumbnails"] = str(thumbnails)
         record_check(directory, checked)
         if not as_json:
-            print_rows(str(directory), [summary])
+            print_kv(str(directory), summary)  # one dataset: a row per fact, readable at 80 columns
         return summary
 
     run_command(as_json, body)

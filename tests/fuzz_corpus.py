@@ -327,7 +327,8 @@ def cases(p: dict[str, Path]) -> list[Case]:
     for opt, v in (("--datapoints", "0"), ("--datapoints", "-1"), ("--datapoints", "100000000000"),
                    ("--grasps-per-object", "0"), ("--grasps-per-object", "100000000"), ("--seed", "-1"),
                    ("--workers", "-1"), ("--engine", "spark"), ("--load", "dynamic"), ("--noise", "kinect"),
-                   ("--thumbnail-sampling", "median"), ("--thumbnail-crop", "8"), ("--thumbnail-crop", "x")):
+                   ("--thumbnail-sampling", "median"), ("--thumbnail-crop", "8"), ("--thumbnail-crop", "x"),
+                   ("--thumbnail-crop", "200")):
         base = {"--datapoints": "4"}
         base[opt] = v
         add("generate", *g, *[x for kv in base.items() for x in kv], "--out", r / f"gen_{opt[2:]}_{v}")

@@ -407,7 +407,7 @@ def two_channel_thumbnails(count: int) -> tuple[torch.Tensor, torch.Tensor]:
     180-degree symmetry), and pose vectors with distinct angles."""
     depth, pixel, theta = scene_depth(), np.array([[127.3, 109.6]]), np.array([0.7])
     grasp = extract_thumbnails(depth, pixel, theta)[0]
-    context = extract_context_thumbnails(depth, pixel, theta, ThumbnailConfig(crop_size=192, out_size=32))[0]
+    context = extract_context_thumbnails(depth, pixel, theta, ThumbnailConfig(crop_size=160, out_size=32))[0]
     images = torch.from_numpy(np.stack([grasp, context]))[None].repeat(count, 1, 1, 1)
     poses = torch.stack([torch.full((count,), 0.6), torch.linspace(0.1, 0.5, count)], dim=1)
     return images, poses

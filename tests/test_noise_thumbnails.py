@@ -382,3 +382,12 @@ def test_thumbnail_configs_refuse_an_unknown_sampling_and_read_back_from_a_card(
     assert ThumbnailConfig.from_dict({"crop_size": 96, "out_size": 32, "sampling": "mean"}, "card").block == 3
     with pytest.raises(InputError, match="card: thumbnail .* is not a thumbnail config"):
         ThumbnailConfig.from_dict({"crop": 96}, "card")
+    with pytest.raises(InputError, match="card: thumbnail config: crop_size = 0"):  # a bad value names the card
+        ThumbnailConfig.from_dict({"crop_size": 0}, "card")
+    # block means need an odd whole block: an even one's mean centres half a pixel off the sample
+    # point (uniform_filter of size 2 averages pixels i - 1 and i), moving the grasp off centre
+    for crop in (64, 80):
+        with pytest.raises(InputError, match="odd whole number"):
+            ThumbnailConfig(crop_size=crop, sampling="mean")
+    assert ThumbnailConfig(crop_size=32, sampling="mean").block == 1
+    assert ThumbnailConfig(crop_size=64).block == 2  # point samples at any pitch

@@ -438,8 +438,10 @@ def test_a_table_option_widens_the_seed_cone(name):
     wide = wide_policy.plan(observation, np.random.default_rng(0))
     assert narrow.info["relaxed"] and not wide.info["relaxed"]
     assert abs(math.degrees(math.acos(abs(wide.approach[2]))) - 45.0) < 3.0
-    with pytest.raises(InputError, match="sampler"):
+    with pytest.raises(InputError, match="cone"):
         make_policy(name, sampler={"cone": 1.0}, **kwargs)
+    with pytest.raises(InputError, match="thumbnail: takes no table"):  # a trained model reads its own cut
+        make_policy(name, thumbnail={"crop_size": 64}, **kwargs)
 
 
 # --------------------------------------------------------------------------------------------------

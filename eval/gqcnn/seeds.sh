@@ -5,8 +5,8 @@
 # the pooled trials of three seeds (`python eval/gqcnn/seeds.py RUNS`).
 # Usage: eval/gqcnn/seeds.sh RUNS NAME=POLICY[:MODEL][+KEY=VALUE...] ...   (SEEDS, SETS and WORKERS
 # from the environment; defaults "0 1 2", "basic typical", 2). Each +KEY=VALUE is a --policy-arg,
-# e.g. 'w60=gqcnn+sampler={max_optical_axis_angle=1.0471975511965976}'. A finished run (its .done
-# marker) is kept.
+# e.g. 'w60=gqcnn+sampler={max_optical_axis_angle=1.0471975511965976}' ('+' separates them, so it
+# cannot appear in MODEL or a VALUE). A finished run (its .done marker) is kept, whatever its args.
 set -euo pipefail
 RUNS=$1; shift
 SB=${SB:-suctionbench}
@@ -17,13 +17,13 @@ for seed in ${SEEDS:-0 1 2}; do
       name=${spec%%=*}; policy=${spec#*=}; model=""; args=()
       if [[ $policy == *+* ]]; then
         IFS=+ read -r -a extra <<< "${policy#*+}"; policy=${policy%%+*}
-        for arg in "${extra[@]}"; do args+=(--policy-arg "$arg"); done
+        for arg in "${extra[@]}"; do if [ -n "$arg" ]; then args+=(--policy-arg "$arg"); fi; done
       fi
       if [[ $policy == *:* ]]; then model=${policy#*:}; policy=${policy%%:*}; fi
       run="${name}_${set}_s${seed}"
       [ -f "$RUNS/$run.done" ] && continue
       rm -rf "${RUNS:?}/$run"
-      $SB eval --policy "$policy" ${model:+--model "$model"} "${args[@]}" --task "$set" --workers "${WORKERS:-2}" \
+      $SB eval --policy "$policy" ${model:+--model "$model"} ${args[@]+"${args[@]}"} --task "$set" --workers "${WORKERS:-2}" \
         --seed "$seed" --out "$RUNS/$run" --resume --json | tail -1 > "$RUNS/$run.json"
       touch "$RUNS/$run.done"
     done

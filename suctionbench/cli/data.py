@@ -90,10 +90,14 @@ def generate(
         require_memory(label_memory(grasps_per_object, label.perturbation.num_samples)
                        * resolve_workers(workers), f"--grasps-per-object {grasps_per_object} x --workers")
         records = resolve_objects(objects)
+        try:
+            thumbnail = dataclasses.replace(THUMBNAIL_GQCNN, crop_size=thumbnail_crop, sampling=thumbnail_sampling)
+        except InputError as exc:
+            raise InputError(f"--thumbnail-crop {thumbnail_crop} with --thumbnail-sampling {thumbnail_sampling}: "
+                             f"{exc}") from None
         config = GenerationConfig(
             datapoints=datapoints, seed=seed, grasps_per_object=grasps_per_object,
-            label=label, scene=scene, noise_model=noise,
-            thumbnail=dataclasses.replace(THUMBNAIL_GQCNN, crop_size=thumbnail_crop, sampling=thumbnail_sampling),
+            label=label, scene=scene, noise_model=noise, thumbnail=thumbnail,
             proposals=None if proposals is None else str(proposals.resolve()),
             proposals_per_image=proposals_per_image,
         )

@@ -199,20 +199,28 @@ def policy_factory(name: str) -> Callable[..., Policy]:
     return resolve_factory(name)
 
 
+TABLE_OPTIONS = ("sampler",)
+"""Nested configs a policy option may set as a table (`configured`). Not the thumbnails: a trained
+model reads its grasps the way its dataset was cut, whatever the policy's config says."""
+
+
 def configured(config: Any, overrides: dict[str, Any]) -> Any:
     """`config` (a policy's config dataclass) with `overrides` (its keyword options, e.g. from
-    ``--policy-arg``) replaced. An option given as a table for a field that is itself a config
-    replaces that config's own fields: ``--policy-arg 'sampler={max_optical_axis_angle=1.0472}'``
-    widens the seed cone and keeps the sampler's other defaults. Unknown names raise TypeError,
-    as `dataclasses.replace` does (`load_policy` reports it as bad options)."""
+    ``--policy-arg``) replaced. An option in `TABLE_OPTIONS` given as a table replaces that nested
+    config's own fields: ``--policy-arg 'sampler={max_optical_axis_angle=1.0472}'`` widens the seed
+    cone and keeps the sampler's other defaults. Unknown names raise TypeError, as
+    `dataclasses.replace` does (`load_policy` reports it as bad options)."""
     changes = dict(overrides)
     for key, value in overrides.items():
+        if not isinstance(value, dict):
+            continue
         current = getattr(config, key, None)
-        if isinstance(value, dict) and dataclasses.is_dataclass(current):
-            try:
-                changes[key] = dataclasses.replace(current, **value)
-            except TypeError as exc:
-                raise TypeError(f"{key}: {exc}") from None
+        if key not in TABLE_OPTIONS or not dataclasses.is_dataclass(current):
+            raise TypeError(f"{key}: takes no table (tables: {', '.join(TABLE_OPTIONS)})")
+        try:
+            changes[key] = dataclasses.replace(current, **value)
+        except TypeError as exc:
+            raise TypeError(f"{key}: {exc}") from None
     return dataclasses.replace(config, **changes)
 
 

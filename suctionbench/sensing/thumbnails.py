@@ -64,6 +64,13 @@ class ThumbnailConfig:
                 raise InputError(f"thumbnail config: {key} = {value!r} must be a positive integer")
         if self.sampling not in SAMPLINGS:
             raise InputError(f"thumbnail config: sampling = {self.sampling!r} must be one of {', '.join(SAMPLINGS)}")
+        step = self.crop_size / self.out_size
+        if self.sampling == "mean" and (self.crop_size % self.out_size or int(step) % 2 == 0):
+            # an even block's mean centres half a pixel off the sample point, and the grasp off the
+            # thumbnail's centre, which the training flips and rotations assume
+            raise InputError(f"thumbnail config: sampling 'mean' needs an odd whole number of image pixels a "
+                             f"thumbnail pixel (crop {self.crop_size} / {self.out_size} = {step:g}; "
+                             "e.g. crop 96 or 32)")
 
     @classmethod
     def from_dict(cls, data: Any, source: str) -> ThumbnailConfig:
@@ -73,7 +80,10 @@ class ThumbnailConfig:
         if not isinstance(data, dict) or not set(data) <= names:
             raise InputError(f"{source}: thumbnail {data!r} is not a thumbnail config "
                              f"(fields: {', '.join(sorted(names))})")
-        return cls(**data)
+        try:
+            return cls(**data)
+        except InputError as exc:
+            raise InputError(f"{source}: {exc}") from None
 
     @property
     def block(self) -> int:

@@ -411,7 +411,7 @@ def test_cem_plans_with_a_trained_format_context_model(tmp_path, thumbnail):
 
 
 def slope_observation(slope_deg: float, height: float = 0.6) -> Observation:
-    """Straight-down view of a table (depth `height`) with a 10 x 10 cm patch of plane whose normal
+    """Straight-down view of a table (depth `height`) with an 80 x 80 px patch of plane whose normal
     is `slope_deg` from the optical axis, turned about the camera's y axis: z = z0 + tan(s) x, i.e.
     at pixel u the depth z0 / (1 - tan(s) (u - cx) / fx)."""
     pose = np.eye(4)

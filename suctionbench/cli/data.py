@@ -134,18 +134,17 @@ def dataset_show(
     def body() -> dict[str, Any]:
         from suctionbench.dataset.storage import DatasetReader, read_card
         from suctionbench.dataset.verify import check_dataset, record_check
-        from suctionbench.learning.data import dataset_thumbnail, label_threshold
+        from suctionbench.learning.data import dataset_noise_model, dataset_thumbnail, label_threshold
         from suctionbench.sensing.thumbnails import describe_thumbnail
 
         checked = check_dataset(directory)  # manifests, hashes, shapes, finite labels, splits: else exit 2
         card = read_card(directory)
         reader = DatasetReader(directory)
-        config = card.get("config") if isinstance(card.get("config"), dict) else {}
         summary = {
             "datapoints": reader.num_datapoints, "shards": reader.num_shards,
             "positive_rate": card.get("positive_rate"), "camera": card.get("camera", {}).get("name"),
             "objects": len(card.get("objects", [])), "status": card.get("status"),
-            "threshold": label_threshold(card), "noise": config.get("noise_model", "paper"),
+            "threshold": label_threshold(card), "noise": dataset_noise_model(card),
             "grasp_thumbnail": describe_thumbnail(dataset_thumbnail(card, f"dataset '{directory}'")),
         }
         generation = card.get("generation") or {}  # time and size (datasets generated since it was recorded)

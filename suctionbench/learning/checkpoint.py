@@ -30,7 +30,7 @@ from suctionbench.errors import InputError
 from suctionbench.io import atomic_path, file_digest, json_safe, read_json  # noqa: F401  (json_safe: used by train.py)
 from suctionbench.learning.data import NormStats, SplitData, dataset_thumbnail
 from suctionbench.learning.models import IMAGE_SIZE, build_model
-from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN, ThumbnailConfig, describe_thumbnail
+from suctionbench.sensing.thumbnails import ThumbnailConfig, describe_thumbnail
 
 WEIGHTS_NAME = "model.safetensors"
 CARD_NAME = "model.json"
@@ -88,10 +88,7 @@ class GQCNNModel:
     def thumbnail(self) -> ThumbnailConfig:
         """The grasp thumbnail's geometry and sampling the network was trained on, as its dataset
         recorded it (cards from before the choice existed: gqcnn's point samples)."""
-        recorded = self.card.get("dataset", {}).get("thumbnail")
-        if recorded is None:
-            return THUMBNAIL_GQCNN
-        return ThumbnailConfig.from_dict(recorded, f"model card of '{self.arch}'")
+        return ThumbnailConfig.recorded(self.card.get("dataset", {}).get("thumbnail"), f"model card of '{self.arch}'")
 
     @property
     def target(self) -> str:

@@ -97,7 +97,7 @@ import torch
 from suctionbench.dataset.storage import DatasetReader, read_split
 from suctionbench.errors import InputError
 from suctionbench.sensing.noise import DepthNoiseConfig, apply_depth_noise_torch
-from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN, ThumbnailConfig
+from suctionbench.sensing.thumbnails import ThumbnailConfig
 
 IMAGE_FIELD = "depth_ims_tf_table"
 """Dataset field with the depth thumbnails (n, 32, 32, 1), metres."""
@@ -336,12 +336,22 @@ def label_threshold(card: dict[str, Any]) -> float:
     return float(value)
 
 
+def dataset_settings(card: dict[str, Any]) -> dict[str, Any]:
+    """The generation settings a dataset card records (``card["config"]``; {} if it has none)."""
+    config = card.get("config")
+    return config if isinstance(config, dict) else {}
+
+
+def dataset_noise_model(card: dict[str, Any]) -> str:
+    """The image noise of the dataset (`sensing.noise.NOISE_MODELS`); "paper" for datasets from
+    before the choice existed."""
+    return dataset_settings(card).get("noise_model", "paper")
+
+
 def dataset_thumbnail(card: dict[str, Any], source: str) -> ThumbnailConfig:
-    """How the dataset cut its grasp thumbnails: ``card["config"]["thumbnail"]``, else gqcnn's
-    (datasets from before the choice existed); InputError naming `source` if it is not a config."""
-    config = card.get("config") if isinstance(card.get("config"), dict) else {}
-    recorded = config.get("thumbnail")
-    return THUMBNAIL_GQCNN if recorded is None else ThumbnailConfig.from_dict(recorded, source)
+    """How the dataset cut its grasp thumbnails (`ThumbnailConfig.recorded`: gqcnn's for datasets
+    from before the choice existed); InputError naming `source` if it is not a config."""
+    return ThumbnailConfig.recorded(dataset_settings(card).get("thumbnail"), source)
 
 
 # -- moments ---------------------------------------------------------------------------------------

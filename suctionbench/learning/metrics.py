@@ -51,10 +51,11 @@ def average_precision(labels: np.ndarray, scores: np.ndarray) -> float:
 def top_grasp_success(labels: np.ndarray, scores: np.ndarray, groups: np.ndarray) -> dict[str, float]:
     """What a policy that executes each image's highest-scored grasp would get, on labelled data.
 
-    The CEM and dense policies act on the top of ~250 candidates an image, so an error there costs
-    a pick while an error on a grasp ranked low costs nothing; accuracy and AP over all grasps weigh
-    both alike. Per group (image) with at least two scored grasps: the label of its highest score
-    (tied highest scores: their mean label, the expectation of picking one at random). Returns the
+    The CEM and dense policies act on the top of the grasps they score an image (~250 for CEM, every
+    valid pixel for the dense policy), so an error there costs a pick while an error on a grasp
+    ranked low costs nothing; accuracy and AP over all grasps weigh both alike. Per group (image)
+    with at least two scored grasps: the label of its highest score (tied highest scores: their
+    mean label, the expectation of picking one at random). Returns the
     mean over those images (``top_grasp_success``), the share of them with any positive grasp (the
     ceiling, ``top_grasp_ceiling``), their mean positive rate (a random pick, ``top_grasp_random``)
     and their count (``images``); NaN figures with no such image."""
@@ -64,22 +65,19 @@ def top_grasp_success(labels: np.ndarray, scores: np.ndarray, groups: np.ndarray
     if not labels.shape == scores.shape == groups.shape:
         raise ValueError(f"labels {labels.shape}, scores {scores.shape} and groups {groups.shape} differ in shape")
     _, inverse, counts = np.unique(groups, return_inverse=True, return_counts=True)
-    keep = counts[inverse] >= 2
-    _, inverse = np.unique(groups[keep], return_inverse=True)
-    labels, scores = labels[keep], scores[keep]
-    n = int(inverse.max()) + 1 if len(inverse) else 0
-    if n == 0:
+    ranked = counts >= 2
+    if not ranked.any():
         return {"images": 0, "top_grasp_success": math.nan, "top_grasp_ceiling": math.nan,
                 "top_grasp_random": math.nan}
-    best = np.full(n, -np.inf)
+    best = np.full(len(counts), -np.inf)
     np.maximum.at(best, inverse, scores)
     top = scores == best[inverse]
-    ties = np.bincount(inverse, weights=top, minlength=n)
-    top_labels = np.bincount(inverse, weights=labels * top, minlength=n) / ties
-    any_positive = np.bincount(inverse, weights=labels > 0.5, minlength=n) > 0
-    mean_label = np.bincount(inverse, weights=labels, minlength=n) / np.bincount(inverse, minlength=n)
-    return {"images": n, "top_grasp_success": float(top_labels.mean()),
-            "top_grasp_ceiling": float(any_positive.mean()), "top_grasp_random": float(mean_label.mean())}
+    top_label = np.bincount(inverse, weights=labels * top) / np.bincount(inverse, weights=top)
+    any_positive = np.bincount(inverse, weights=labels > 0.5) > 0
+    mean_label = np.bincount(inverse, weights=labels) / counts
+    return {"images": int(ranked.sum()), "top_grasp_success": float(top_label[ranked].mean()),
+            "top_grasp_ceiling": float(any_positive[ranked].mean()),
+            "top_grasp_random": float(mean_label[ranked].mean())}
 
 
 def plot_precision_recall(path: str | Path, precision: np.ndarray, recall: np.ndarray, *, ap: float,

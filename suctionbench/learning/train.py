@@ -70,6 +70,8 @@ from suctionbench.learning.data import (
     NormStats,
     SplitData,
     augment,
+    dataset_noise_model,
+    dataset_settings,
     dataset_thumbnail,
     label_threshold,
     labels_of,
@@ -394,12 +396,12 @@ def _differences(old: dict[str, Any], new: dict[str, Any], prefix: str = "") -> 
 def _dataset_summary(directory: Path, card: dict[str, Any], split: str, train_data: SplitData,
                      val_data: SplitData) -> dict[str, Any]:
     """The dataset facts a model card carries: where it came from and what camera and cup it assumes."""
-    config = card.get("config") if isinstance(card.get("config"), dict) else {}
+    config = dataset_settings(card)
     label = config.get("label") if isinstance(config.get("label"), dict) else {}
     return {
         "path": str(directory.resolve()), "fingerprint": card.get("fingerprint"), "datapoints": card.get("datapoints"),
         "positive_rate": card.get("positive_rate"), "camera": card.get("camera"),
-        "cup": card.get("cup", label.get("cup")), "noise_model": config.get("noise_model", "paper"),
+        "cup": card.get("cup", label.get("cup")), "noise_model": dataset_noise_model(card),
         "noise": config.get("noise"), "thumbnail": to_dict(dataset_thumbnail(card, f"dataset '{directory}'")),
         "seed": config.get("seed"),
         "objects": len(card.get("objects", [])) if isinstance(card.get("objects"), list) else None,

@@ -85,6 +85,12 @@ class ThumbnailConfig:
         except InputError as exc:
             raise InputError(f"{source}: {exc}") from None
 
+    @classmethod
+    def recorded(cls, data: Any, source: str) -> ThumbnailConfig:
+        """The config a card records (`from_dict`), or gqcnn's where it records none (cards from
+        before the choice existed)."""
+        return THUMBNAIL_GQCNN if data is None else cls.from_dict(data, source)
+
     @property
     def block(self) -> int:
         """Side (image pixels) of the block a thumbnail pixel stands for (3 for gqcnn, 9 for context)."""

@@ -191,7 +191,8 @@ def check_grasp_on_object(action: GraspAction, scene: Scene, cloud_valid: np.nda
     np.testing.assert_allclose(PRIMESENSE.project(action.point), action.pixel, atol=1e-6)
     assert action.point_world[2] > 0.005, "grasp point not above the table"
     assert np.linalg.norm(action.approach) == pytest.approx(1.0, abs=1e-9)
-    assert action.approach[2] >= math.cos(math.radians(30.0)) - 1e-9, "approach not within 30 deg of the optical axis"
+    cone = SamplerConfig().max_optical_axis_angle
+    assert action.approach[2] >= math.cos(cone) - 1e-9, "approach not within the seed cone of the optical axis"
     assert action.approach_world[2] < 0.0, "approach must point down into the object"
     if cloud_valid is not None:
         assert cloud_valid[v, u]
@@ -344,7 +345,7 @@ def test_cem_climbs_to_the_stub_optimum():
     poses = action.candidates["poses"]
     np.testing.assert_allclose(poses[:, 0], action.candidates["points"][:, 2], atol=1e-6)
     assert poses[action.info["chosen"], 1] < math.radians(2.0)
-    assert np.all(poses[:, 1] <= math.radians(30.0) + 1e-6)
+    assert np.all(poses[:, 1] <= SamplerConfig().max_optical_axis_angle + 1e-6)
 
 
 def test_cem_on_rendered_scenes(scenes):
@@ -424,18 +425,19 @@ def slope_observation(slope_deg: float, height: float = 0.6) -> Observation:
 
 
 @pytest.mark.parametrize("name", ["planarity-centroid", "gqcnn"])
-def test_a_table_option_widens_the_seed_cone(name):
-    # A face 45 deg from the optical axis lies outside gqcnn's 30 deg seed cone: the sampler finds
-    # no valid pixel and drops its angle limits (relaxed). `sampler={max_optical_axis_angle=...}`
-    # (a --policy-arg table) widens the cone to 60 deg and keeps the sampler's other defaults: the
-    # face's pixels are valid and every candidate approaches ~45 deg from the optical axis (the
-    # normal of a plane, up to the 1 px smoothing at the patch's rim).
+def test_a_table_option_sets_the_seed_cone(name):
+    # A face 45 deg from the optical axis lies inside the default 60 deg seed cone: its pixels are
+    # valid and every candidate approaches ~45 deg from the optical axis (the normal of a plane, up
+    # to the 1 px smoothing at the patch's rim). `sampler={max_optical_axis_angle=...}` (a
+    # --policy-arg table) narrows the cone to gqcnn's 30 deg and keeps the sampler's other
+    # defaults: no pixel is valid and the sampler drops its angle limits (relaxed).
     kwargs = {"model": CentreDepthStub(z_best=0.5, scale=0.01)} if name == "gqcnn" else {}
     observation = slope_observation(45.0)
-    narrow = make_policy(name, **kwargs).plan(observation, np.random.default_rng(0))
-    wide_policy = make_policy(name, sampler={"max_optical_axis_angle": math.radians(60)}, **kwargs)
-    assert wide_policy.config.sampler == SamplerConfig(max_optical_axis_angle=math.radians(60))
-    wide = wide_policy.plan(observation, np.random.default_rng(0))
+    assert SamplerConfig().max_optical_axis_angle == pytest.approx(math.radians(60))
+    narrow_policy = make_policy(name, sampler={"max_optical_axis_angle": math.radians(30)}, **kwargs)
+    assert narrow_policy.config.sampler == SamplerConfig(max_optical_axis_angle=math.radians(30))
+    narrow = narrow_policy.plan(observation, np.random.default_rng(0))
+    wide = make_policy(name, **kwargs).plan(observation, np.random.default_rng(0))
     assert narrow.info["relaxed"] and not wide.info["relaxed"]
     assert abs(math.degrees(math.acos(abs(wide.approach[2]))) - 45.0) < 3.0
     with pytest.raises(InputError, match="cone"):

@@ -109,8 +109,8 @@ def objects_stats(
     as_json: JsonOpt = False,
 ) -> None:
     """Per-set difficulty: share of surface grasps that seal and that are robust (rwr > 0.2); per
-    object its known-state pickability (stable-pose share with a grasp of rwr > 0.5 within 30 deg of
-    straight down) and mass; and the mass cap with its derivation."""
+    object its known-state pickability (stable-pose share with a grasp of rwr > 0.5 within the image
+    policies' 60 deg of straight down) and mass; and the mass cap with its derivation."""
 
     def body() -> dict[str, Any]:
         from suctionbench.config import LabelConfig

@@ -7,8 +7,9 @@ its stable poses, the share of stable-pose probability in which at least one gra
 Labels are those of the benchmark's known-state policy (LabelConfig.for_episode: the disturbing
 wrench includes the inertial load of the episode's peak acceleration); the same share under the
 weight alone (LabelConfig()) tells an object too heavy to carry through the transport from one with
-no usable surface. An object with none is flagged (a triangular prism lying on a face offers only
-faces tilted 60 deg), not removed: it measures what no top-down policy can do.
+no usable surface. An object with none is flagged (under gqcnn's 30 deg cone, a triangular prism
+lying on a face offers only faces tilted 60 deg), not removed: it measures what no top-down policy
+can do.
 """
 
 from __future__ import annotations
@@ -34,8 +35,13 @@ where an analytic label predicts a successful pick."""
 
 APPROACH_CONE = SamplerConfig().max_optical_axis_angle
 """Largest angle (rad) between a grasp's approach and straight down that the image policies (heuristics,
-CEM, GQ-CNN) sample: gqcnn's 30 deg from the optical axis (policies.base.SamplerConfig), taken here
-with the camera looking straight down."""
+CEM, GQ-CNN) sample: 60 deg from the optical axis (policies.base.SamplerConfig), taken here with the
+camera looking straight down."""
+
+CONE_EDGE = 1e-6
+"""Slack on the cone's cosine (about 1e-4 deg): a face exactly at the cone's edge counts as inside,
+whichever way rounding tilts it (a lying triangular prism's faces at 60 deg come out of its stable
+pose 59.999999 or 60.000001 deg from vertical)."""
 
 PICK_BATCH = 64
 """Grasps labelled at a time per pose; a pose stops at the first batch holding a robust grasp."""
@@ -79,7 +85,7 @@ def pickability(
         labeller = SuctionLabeller(mesh, config, mass=record.mass, com=com)
         rng = np.random.default_rng((seed, index))
         points, approaches = sample_surface_grasps(mesh, 8 * grasps, rng)
-        inside = approaches[:, 2] <= -np.cos(cone)
+        inside = approaches[:, 2] <= -np.cos(cone) + CONE_EDGE
         points, approaches = points[inside][:grasps], approaches[inside][:grasps]
         best, labelled = 0.0, 0
         for start in range(0, len(points), PICK_BATCH):

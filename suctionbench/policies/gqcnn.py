@@ -6,7 +6,7 @@ Algorithm (one `plan`)
 ----------------------
 1. Seeds: `num_seed_samples` distinct valid pixels drawn uniformly (`base.scene_cloud`: object
    pixels whose approach, minus the normal of the 1 px Gaussian-smoothed depth image, lies within
-   30 deg of the optical axis and 80 deg of straight down).
+   60 deg of the optical axis and 80 deg of straight down).
 2. Scoring a set of pixels: the grasp point is the depth pixel deprojected, the approach minus the
    smoothed normal there; the 32 x 32 thumbnail is cut from the raw depth image around the pixel
    (or its block means, for a model trained on those: `grasp_thumbnail`) and turned to the
@@ -185,8 +185,8 @@ class CEMConfig:
     dropped; after this many batches a round goes on with the samples it has."""
 
     sampler: SamplerConfig = field(default_factory=SamplerConfig)
-    """Valid grasp pixels and normal estimation: 30 deg to the optical axis, 80 deg to straight
-    down, 1 px depth smoothing (gqcnn's Dex-Net 3.0 configuration)."""
+    """Valid grasp pixels and normal estimation: 60 deg to the optical axis (gqcnn: 30), 80 deg to
+    straight down, 1 px depth smoothing (gqcnn's Dex-Net 3.0 configuration)."""
 
     thumbnail: ThumbnailConfig = THUMBNAIL_GQCNN
     """Thumbnail geometry and sampling for a model that states none (96 px crop scaled to 32 x 32,

@@ -3,7 +3,7 @@ Objects"): random, centroid, planarity and planarity-centroid.
 
 All four plan from the same candidates: `HeuristicConfig.num_candidates` distinct pixels drawn
 uniformly (from the `rng` passed to `plan`) among the valid grasp pixels of `base.scene_cloud`,
-i.e. object pixels whose approach (minus the smoothed-image surface normal) lies within 30 deg of
+i.e. object pixels whose approach (minus the smoothed-image surface normal) lies within 60 deg of
 the optical axis and within 80 deg of straight down, the seed sampler of the GQ-CNN policy. Each
 heuristic maps its metric monotonically into q in [0, 1] and returns the candidate with the
 highest q (the first one on ties).

@@ -5,7 +5,7 @@
 # the pooled trials of three seeds (`python eval/gqcnn/seeds.py RUNS`).
 # Usage: eval/gqcnn/seeds.sh RUNS NAME=POLICY[:MODEL][+KEY=VALUE...] ...   (SEEDS, SETS and WORKERS
 # from the environment; defaults "0 1 2", "basic typical", 2). Each +KEY=VALUE is a --policy-arg,
-# e.g. 'w60=gqcnn+sampler={max_optical_axis_angle=1.0471975511965976}' ('+' separates them, so it
+# e.g. 'n30=gqcnn+sampler={max_optical_axis_angle=0.5235987755982988}' ('+' separates them, so it
 # cannot appear in MODEL or a VALUE). A finished run (its .done marker) is kept, whatever its args.
 set -euo pipefail
 RUNS=$1; shift

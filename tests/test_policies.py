@@ -319,17 +319,13 @@ def test_cem_climbs_to_the_stub_optimum():
     """On a dome whose nearest point the stub likes best, CEM ends nearer the optimum than its seeds.
     Over 10 plans the best of the 250 uniform seeds lies a median 3.2 px from the apex and the
     plan's grasp 2.1 px (8 of 10 plans improve; the mixture resamples around the elites, so the
-    paper's 3 rounds of 50 refine locally rather than jump to the optimum). The stub's q reads
-    microns of the dome's depth at the thumbnail's centre, which the thumbnail's turn to the
-    approach's image direction resamples, so the counts hold for the normals they were measured
-    with: gqcnn's 1 px smoothing (`normal_sigma = 0`)."""
+    paper's 3 rounds of 50 refine locally rather than jump to the optimum)."""
     apex = np.array([350.0, 220.0])
     observation = dome_observation(apex=tuple(apex))
-    config = CEMConfig(sampler=SamplerConfig(normal_sigma=0.0))
     seed_best, final_best, distance = [], [], []
     for seed in range(10):
         stub = CentreDepthStub(z_best=0.55, scale=2e-5)
-        action = GQCNNPolicy(stub, config).plan(observation, np.random.default_rng(seed))
+        action = GQCNNPolicy(stub).plan(observation, np.random.default_rng(seed))
         iteration, q = action.candidates["iteration"], action.candidates["q"]
         assert len(action.info["round_best_q"]) == 4 and action.info["evaluations"] == 250 + 3 * 50
         assert [len(images) for images, _ in stub.calls] == [250, 50, 50, 50]
@@ -502,12 +498,12 @@ def test_normals_average_the_cup_footprint():
     # 1.143 mm) under its axial noise, sigma_n = 1.2 + 1.9 (0.6 - 0.4)^2 = 1.276 mm per pixel, iid.
     # Gaussian smoothing of width s px then differentiation leaves a slope noise per image axis of
     # sigma_n / (sqrt(8 pi) s^2 p) (the L2 norm of a 2-D Gaussian's derivative is
-    # 1 / (sqrt(8 pi) s^2)). The default smooths by half the lip radius on the surface, 3.75 mm =
+    # 1 / (sqrt(8 pi) s^2)). The footprint smooths by half the lip radius on the surface, 3.75 mm =
     # 3.28 px: 0.0207 rad per axis, and the angle of an isotropic 2-D Gaussian error has the Rayleigh
-    # median sqrt(2 ln 2) x that: 1.40 deg. gqcnn's 1 px smoothing (`normal_sigma = 0`) leaves
+    # median sqrt(2 ln 2) x that: 1.40 deg. gqcnn's 1 px smoothing (`normal_sigma = 0`, the default) leaves
     # ~10x more (s^2 = 10.8 times; the continuous formula's 14.8 deg is an upper bound for the
     # discrete 1 px kernel).
-    from suctionbench.policies.base import normal_sigma_pixels
+    from suctionbench.policies.base import FOOTPRINT_NORMAL_SIGMA, normal_sigma_pixels
 
     height, width = PRIMESENSE.height, PRIMESENSE.width
     depth = np.full((height, width), 0.6, dtype=np.float32)
@@ -516,7 +512,8 @@ def test_normals_average_the_cup_footprint():
     pose = np.eye(4)
     pose[:3, :3] = np.diag([1.0, -1.0, -1.0])
     pose[2, 3] = 0.6
-    config = SamplerConfig()
+    config = SamplerConfig(normal_sigma=FOOTPRINT_NORMAL_SIGMA)
+    assert FOOTPRINT_NORMAL_SIGMA == pytest.approx(3.75e-3)
     assert normal_sigma_pixels(config, PRIMESENSE, depth[mask]) == pytest.approx(3.75e-3 * 525 / 0.6, rel=0.02)
 
     def median_error(cfg: SamplerConfig) -> float:
@@ -529,6 +526,6 @@ def test_normals_average_the_cup_footprint():
         return float(np.median(np.concatenate(errors)))
 
     footprint = median_error(config)
-    one_pixel = median_error(dataclasses.replace(config, normal_sigma=0.0))
+    one_pixel = median_error(SamplerConfig())
     assert footprint == pytest.approx(1.40, rel=0.15)
     assert 6.0 * footprint < one_pixel < 14.8

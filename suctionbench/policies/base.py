@@ -22,10 +22,10 @@ Geometry read from the image (`SceneCloud`)
   deprojected, and the normal at a pixel is the cross product of the 3D tangents along the image
   columns and rows (central differences, as gqcnn's `normal_cloud_im`), oriented towards the
   camera. Pixels whose 4-neighbourhood has a no-return pixel have no normal. The Gaussian's width
-  is `normal_sigma` on the surface (half the cup's lip radius: the normal the lip seals along,
-  averaged over the footprint it covers), in pixels at the object's median depth; gqcnn smooths
-  by 1 px (`depth_sigma`, `normal_sigma = 0`), which at 0.6 m leaves the PrimeSense's 1.3 mm
-  per-pixel noise a normal 7 deg off the surface's in the median.
+  is gqcnn's 1 px (`depth_sigma`), or `normal_sigma` on the surface where that is set (e.g. half
+  the cup's lip radius, 3.75 mm: the normal the lip seals along, averaged over the footprint it
+  covers, in pixels at the object's median depth). On a flat face at 0.6 m the PrimeSense's
+  1.3 mm per-pixel noise leaves 1 px normals 12 deg off in the median, 3.75 mm normals 1.4 deg.
 - Planarity (`disc_errors`) reads the smoothed points too, so that per-pixel sensor noise does not
   make every face look rough.
 - Grasp at a pixel: the point is the *raw* depth pixel deprojected (the measured surface, so that
@@ -243,6 +243,10 @@ def make_policy(name: str, **kwargs: Any) -> Policy:
 # --------------------------------------------------------------------------------------------------
 
 
+FOOTPRINT_NORMAL_SIGMA = CUP_DEFAULT.radius / 2.0
+"""`SamplerConfig.normal_sigma` that averages the normal over the default cup's footprint (m)."""
+
+
 @dataclass(frozen=True)
 class SamplerConfig:
     """Which pixels a policy may grasp, and how normals are read (gqcnn's Dex-Net 3.0 seed sampler)."""
@@ -265,14 +269,15 @@ class SamplerConfig:
     that planarity reads (`disc_errors`), and for the normals when `normal_sigma` is 0; gqcnn: 1 px.
     0 disables smoothing."""
 
-    normal_sigma: float = CUP_DEFAULT.radius / 2.0
+    normal_sigma: float = 0.0
     """Standard deviation (m, on the surface) of the Gaussian that smooths the depth image before
-    normals are estimated, turned into pixels at the object's median depth. A compliant lip seals
-    along the mean plane of the footprint it covers, not along the surface's normal at one pixel:
-    a Gaussian of half the lip radius puts 86 % of its weight (1 - e^-2) inside the lip's disc. At
-    0.6 m with the PrimeSense (f = 525 px) 3.75 mm is 3.3 px, which cuts the per-pixel noise in a
-    normal about 10 times against gqcnn's 1 px (the noise of a Gaussian-derivative estimate falls
-    as 1/sigma^2). 0 reads the normals from the `depth_sigma` image, as gqcnn does."""
+    normals are estimated, turned into pixels at the object's median depth; 0 (default) reads the
+    normals from the `depth_sigma` image, as gqcnn does. A compliant lip seals along the mean plane
+    of the footprint it covers, not along the surface's normal at one pixel: a Gaussian of half the
+    lip radius (FOOTPRINT_NORMAL_SIGMA) puts 86 % of its weight (1 - e^-2) inside the lip's disc.
+    At 0.6 m with the PrimeSense (f = 525 px) 3.75 mm is 3.3 px, which cuts the per-pixel noise in
+    a normal about 10 times against gqcnn's 1 px (the noise of a Gaussian-derivative estimate falls
+    as 1/sigma^2)."""
 
     table_clearance: float = 0.005
     """Object segmentation without a mask: pixels whose point lies more than this (m) above the

@@ -45,6 +45,12 @@ def test_smoke_eval_end_to_end_from_the_logs(tmp_path):
     # releases, and a report of the run says which one it was
     run = json.loads((tmp_path / "run" / "run.json").read_text())
     assert run["model"] is None and run["model_used"] == "assets/" + "/".join(DEFAULT_MODEL)
+    # and the policy's config it planned with, defaults included: a default seed cone or normal
+    # smoothing that changes later leaves this run readable
+    from suctionbench.config import to_dict
+    from suctionbench.policies.gqcnn import CEMConfig
+
+    assert run["policy_config"] == to_dict(CEMConfig())
     build_report([tmp_path / "run"], tmp_path / "report")
     assert f"model {run['model_used']};" in (tmp_path / "report" / "report.md").read_text()
 

@@ -3,6 +3,7 @@ the results table is then computed from the logs (suctionbench.runlog.reader), n
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import re
@@ -115,7 +116,7 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
     if policy in ("analytic", "random-surface"):
         if policy_args:
             raise InputError(f"--policy-arg: the known-state policy '{policy}' takes no options")
-        spec = policy
+        spec, policy_config = policy, None
     else:
         spec = canonical_spec(policy)
         kwargs = dict(policy_args)
@@ -123,7 +124,9 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
             _check_model(kwargs.get("model", model))
             if model:
                 kwargs.setdefault("model", model)
-        load_policy(spec, kwargs)  # unknown policy or bad options -> InputError before any work
+        # Unknown policy or bad options -> InputError before any work. The run records the built
+        # config, defaults included, so that a run stays readable when a default changes.
+        policy_config = _config_record(load_policy(spec, kwargs))
     intrinsics = resolve_camera(camera)
     camera_spec = str(Path(camera).resolve()) if Path(str(camera)).is_file() else intrinsics.name
     from suctionbench.config import cup_preset
@@ -145,7 +148,8 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
             raise InputError(f"--out '{out}': not empty (a finished run? pass --overwrite to replace a run, or "
                              "choose another --out)")
         check_removable_run(out)
-    run = {"task": asdict(task), "policy": label, "policy_spec": spec, "policy_args": policy_args, "model": model,
+    run = {"task": asdict(task), "policy": label, "policy_spec": spec, "policy_args": policy_args,
+           "policy_config": policy_config, "model": model,
            "model_used": model_used(spec, model, policy_args),
            "metric": metric, "cup": cup, "camera": intrinsics.name, "trials": len(planned),
            "seed": seed if seed is not None else task.seed, "compute_model": CYCLE_MODEL.compute_time(spec),
@@ -308,6 +312,14 @@ def remove_run(run_dir: Path) -> None:
 
     check_removable_run(run_dir)
     shutil.rmtree(run_dir)
+
+
+def _config_record(policy: Any) -> dict[str, Any] | None:
+    """A built-in policy's config as a dict (every field, defaults included); None for a plug-in."""
+    from suctionbench.config import to_dict
+
+    config = getattr(policy, "config", None)
+    return to_dict(config) if dataclasses.is_dataclass(config) and not isinstance(config, type) else None
 
 
 def _check_same_run(staging: Path, run: dict[str, Any]) -> None:

@@ -17,11 +17,15 @@ Geometry read from the image (`SceneCloud`)
   world frame, found with the camera pose. The table is the world plane z = 0 in every scene of
   the benchmark, so no plane is fitted to the image: a fit is what a real system without a
   calibrated camera pose would need, and it would only add a failure mode here.
-- Surface normals: the depth image is smoothed by a Gaussian of `depth_sigma` (1 px) as a
-  normalised convolution (no-return pixels, depth 0, neither contribute nor are filled), the
-  smoothed image is deprojected, and the normal at a pixel is the cross product of the 3D tangents
-  along the image columns and rows (central differences, as gqcnn's `normal_cloud_im`), oriented
-  towards the camera. Pixels whose 4-neighbourhood has a no-return pixel have no normal.
+- Surface normals: the depth image is smoothed by a Gaussian as a normalised convolution
+  (no-return pixels, depth 0, neither contribute nor are filled), the smoothed image is
+  deprojected, and the normal at a pixel is the cross product of the 3D tangents along the image
+  columns and rows (central differences, as gqcnn's `normal_cloud_im`), oriented towards the
+  camera. Pixels whose 4-neighbourhood has a no-return pixel have no normal. The Gaussian's width
+  is gqcnn's 1 px (`depth_sigma`), or `normal_sigma` on the surface where that is set (e.g. half
+  the cup's lip radius, 3.75 mm: the normal the lip seals along, averaged over the footprint it
+  covers, in pixels at the object's median depth). On a flat face at 0.6 m the PrimeSense's
+  1.3 mm per-pixel noise leaves 1 px normals 12 deg off in the median, 3.75 mm normals 1.4 deg.
 - Planarity (`disc_errors`) reads the smoothed points too, so that per-pixel sensor noise does not
   make every face look rough.
 - Grasp at a pixel: the point is the *raw* depth pixel deprojected (the measured surface, so that
@@ -46,6 +50,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 from scipy import ndimage
 
+from suctionbench.config import CUP_DEFAULT
 from suctionbench.errors import InputError
 from suctionbench.sensing.camera import CameraIntrinsics
 
@@ -238,6 +243,10 @@ def make_policy(name: str, **kwargs: Any) -> Policy:
 # --------------------------------------------------------------------------------------------------
 
 
+FOOTPRINT_NORMAL_SIGMA = CUP_DEFAULT.radius / 2.0
+"""`SamplerConfig.normal_sigma` that averages the normal over the default cup's footprint (m)."""
+
+
 @dataclass(frozen=True)
 class SamplerConfig:
     """Which pixels a policy may grasp, and how normals are read (gqcnn's Dex-Net 3.0 seed sampler)."""
@@ -256,8 +265,19 @@ class SamplerConfig:
     gqcnn's Dex-Net 3.0 policy: 80 deg. The arm never approaches from below."""
 
     depth_sigma: float = 1.0
-    """Standard deviation (pixels) of the Gaussian that smooths the depth image before normals are
-    estimated; gqcnn: 1 px. 0 disables smoothing."""
+    """Standard deviation (pixels) of the Gaussian that smooths the depth image for the point cloud
+    that planarity reads (`disc_errors`), and for the normals when `normal_sigma` is 0; gqcnn: 1 px.
+    0 disables smoothing."""
+
+    normal_sigma: float = 0.0
+    """Standard deviation (m, on the surface) of the Gaussian that smooths the depth image before
+    normals are estimated, turned into pixels at the object's median depth; 0 (default) reads the
+    normals from the `depth_sigma` image, as gqcnn does. A compliant lip seals along the mean plane
+    of the footprint it covers, not along the surface's normal at one pixel: a Gaussian of half the
+    lip radius (FOOTPRINT_NORMAL_SIGMA) puts 86 % of its weight (1 - e^-2) inside the lip's disc.
+    At 0.6 m with the PrimeSense (f = 525 px) 3.75 mm is 3.3 px, which cuts the per-pixel noise in
+    a normal about 10 times against gqcnn's 1 px (the noise of a Gaussian-derivative estimate falls
+    as 1/sigma^2)."""
 
     table_clearance: float = 0.005
     """Object segmentation without a mask: pixels whose point lies more than this (m) above the
@@ -273,6 +293,8 @@ class SamplerConfig:
                 raise InputError(f"sampler config: {key} = {value!r} must be an angle in (0, {high:.4f}] rad")
         if not (isinstance(self.depth_sigma, int | float) and 0.0 <= self.depth_sigma <= 10.0):
             raise InputError(f"sampler config: depth_sigma = {self.depth_sigma!r} must be in [0, 10] pixels")
+        if not (isinstance(self.normal_sigma, int | float) and 0.0 <= self.normal_sigma <= 0.05):
+            raise InputError(f"sampler config: normal_sigma = {self.normal_sigma!r} must be in [0, 0.05] m")
         if not (isinstance(self.table_clearance, int | float) and self.table_clearance >= 0.0):
             raise InputError(f"sampler config: table_clearance = {self.table_clearance!r} must be >= 0 m")
         if not (isinstance(self.table_height, int | float) and math.isfinite(self.table_height)):
@@ -327,8 +349,9 @@ class SceneCloud:
     margin, the raw points elsewhere (table only, far from any object pixel)."""
 
     approaches: np.ndarray
-    """Minus the smoothed-image normals (H, W, 3), unit; zero where there is no normal and away from
-    the object (normals are computed in the object's bounding box plus the smoothing margin)."""
+    """Minus the smoothed-image normals (H, W, 3), unit (smoothed by `normal_sigma`); zero where
+    there is no normal and away from the object (normals are computed in the object's bounding box
+    plus the smoothing margin)."""
 
     object_mask: np.ndarray
     """Object pixels (H, W) bool with valid depth."""
@@ -379,6 +402,15 @@ def segment_object(observation: Observation, points: np.ndarray, config: Sampler
     return has_depth & (height > config.table_height + config.table_clearance)
 
 
+def normal_sigma_pixels(config: SamplerConfig, intrinsics: CameraIntrinsics, object_depths: np.ndarray) -> float:
+    """The normals' smoothing in pixels: `normal_sigma` (m) at the object's median depth, or
+    `depth_sigma` when `normal_sigma` is 0."""
+    if config.normal_sigma <= 0.0:
+        return float(config.depth_sigma)
+    focal = 0.5 * (intrinsics.fx + intrinsics.fy)
+    return float(config.normal_sigma * focal / np.median(object_depths))
+
+
 def scene_cloud(observation: Observation, config: SamplerConfig) -> SceneCloud:
     """Read the point cloud, normals, object pixels and valid grasp pixels of an observation."""
     intrinsics = observation.intrinsics
@@ -388,20 +420,26 @@ def scene_cloud(observation: Observation, config: SamplerConfig) -> SceneCloud:
     object_mask = segment_object(observation, points, config)
     if not object_mask.any():
         raise NoGraspError("no object pixel in the observation (empty mask or nothing above the table)")
+    normal_sigma = normal_sigma_pixels(config, intrinsics, depth[object_mask])
     # Normals only around the object: a margin of the smoothing radius (4 sigma, scipy's truncation)
     # plus the gradient's neighbour leaves every object pixel's normal as on the whole image.
-    margin = math.ceil(4.0 * config.depth_sigma) + 2
+    margin = math.ceil(4.0 * max(config.depth_sigma, normal_sigma)) + 2
     occupied = np.argwhere(object_mask)
     (r0, c0) = np.maximum(occupied.min(axis=0) - margin, 0)
     (r1, c1) = np.minimum(occupied.max(axis=0) + margin, np.array(depth.shape) - 1)  # inside the image
     roi = (slice(r0, r1 + 1), slice(c0, c1 + 1))
-    smooth = smooth_depth(depth[roi], config.depth_sigma)
     v, u = np.mgrid[roi]
-    smooth_points = np.stack([(u - intrinsics.cx) * smooth / intrinsics.fx,
-                              (v - intrinsics.cy) * smooth / intrinsics.fy, smooth], axis=-1)
+
+    def deproject(smooth: np.ndarray) -> np.ndarray:
+        return np.stack([(u - intrinsics.cx) * smooth / intrinsics.fx,
+                         (v - intrinsics.cy) * smooth / intrinsics.fy, smooth], axis=-1)
+
+    smooth_points = deproject(smooth_depth(depth[roi], config.depth_sigma))
+    normal_points = (smooth_points if normal_sigma == config.depth_sigma
+                     else deproject(smooth_depth(depth[roi], normal_sigma)))
     approaches = np.zeros_like(points)
     has_normal = np.zeros_like(has_depth)
-    normals, has_normal[roi] = surface_normals(smooth_points, has_depth[roi])
+    normals, has_normal[roi] = surface_normals(normal_points, has_depth[roi])
     approaches[roi] = -normals
     smoothed = points.copy()
     smoothed[roi] = smooth_points

@@ -513,7 +513,7 @@ def test_normals_average_the_cup_footprint():
     pose[:3, :3] = np.diag([1.0, -1.0, -1.0])
     pose[2, 3] = 0.6
     config = SamplerConfig(normal_sigma=FOOTPRINT_NORMAL_SIGMA)
-    assert FOOTPRINT_NORMAL_SIGMA == pytest.approx(3.75e-3)
+    assert math.isclose(FOOTPRINT_NORMAL_SIGMA, 3.75e-3)
     assert normal_sigma_pixels(config, PRIMESENSE, depth[mask]) == pytest.approx(3.75e-3 * 525 / 0.6, rel=0.02)
 
     def median_error(cfg: SamplerConfig) -> float:

@@ -54,7 +54,8 @@ def approach_errors(run: Path) -> list[tuple[str, bool, str | None, float]]:
         point, approach = np.asarray(grasp[:3]), np.asarray(grasp[3:6])
         _, _, face = trimesh.proximity.closest_point(mesh, [point])
         cosine = float(np.clip(-approach @ mesh.face_normals[face[0]], -1.0, 1.0))
-        rows.append((result["object"], bool(result["success"]), result.get("failure"), float(np.degrees(np.arccos(cosine)))))
+        angle = float(np.degrees(np.arccos(cosine)))
+        rows.append((result["object"], bool(result["success"]), result.get("failure"), angle))
     return rows
 
 

@@ -14,30 +14,24 @@ and 90th percentile angle, and success and `no_seal` shares by angle band.
 from __future__ import annotations
 
 import sys
+from functools import cache
 from pathlib import Path
 
 import numpy as np
 import trimesh
-from scipy.spatial.transform import Rotation
 
+from suctionbench.errors import InputError
 from suctionbench.objects.registry import load_object
-from suctionbench.runlog.reader import iter_messages, read_run
+from suctionbench.runlog.reader import frame_pose, read_run
 
 BANDS = ((0.0, 5.0), (5.0, 10.0), (10.0, 15.0), (15.0, 25.0), (25.0, 180.0))
 """Angle bands (deg) of the summary."""
 
 
-def object_pose(log: Path) -> np.ndarray | None:
-    """World-from-object transform (4, 4) at the log's first transform of the object."""
-    for _, message in iter_messages(log, "/tf"):
-        for frame in message["transforms"]:
-            if frame["child_frame_id"] == "object":
-                q, t = frame["rotation"], frame["translation"]
-                pose = np.eye(4)
-                pose[:3, :3] = Rotation.from_quat([q["x"], q["y"], q["z"], q["w"]]).as_matrix()
-                pose[:3, 3] = [t["x"], t["y"], t["z"]]
-                return pose
-    return None
+@cache
+def object_mesh(key: str) -> trimesh.Trimesh:
+    """An object's mesh in its own frame, loaded once per object of a run."""
+    return load_object(key).mesh()
 
 
 def approach_errors(run: Path) -> list[tuple[str, bool, str | None, float]]:
@@ -46,10 +40,13 @@ def approach_errors(run: Path) -> list[tuple[str, bool, str | None, float]]:
     for record in read_run(run / "trials"):
         result = record["result"]
         grasp = result.get("grasp_world")
-        pose = object_pose(Path(record["path"]))
-        if not result.get("valid", True) or grasp is None or pose is None:
+        if not result.get("valid", True) or grasp is None:
             continue
-        mesh = load_object(result["object"]).mesh()
+        try:
+            pose = frame_pose(record["path"], "object")  # the placement, before the cup moves it
+        except InputError:
+            continue
+        mesh = object_mesh(result["object"]).copy()
         mesh.apply_transform(pose)
         point, approach = np.asarray(grasp[:3]), np.asarray(grasp[3:6])
         _, _, face = trimesh.proximity.closest_point(mesh, [point])

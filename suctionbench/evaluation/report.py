@@ -378,14 +378,14 @@ class LoggedView:
 
 def first_view(path: Path) -> LoggedView | None:
     """The first depth frame of a run log with its calibration and camera pose; None if it lacks them."""
-    from suctionbench.runlog.reader import depth_image, iter_messages
+    from suctionbench.runlog.reader import depth_image, frame_pose, iter_messages
 
     depth_msg = next(iter_messages(path, "/camera/depth"), None)
     calib = next(iter_messages(path, "/camera/calibration"), None)
     if depth_msg is None or calib is None:
         return None
     k = np.asarray(calib[1]["K"], dtype=float).reshape(3, 3)
-    return LoggedView(depth_image(depth_msg[1]), k, _camera_pose(path))
+    return LoggedView(depth_image(depth_msg[1]), k, frame_pose(path, "camera"))
 
 
 def _planned_view(path: Path, record: dict[str, Any]) -> tuple[np.ndarray, tuple[float, float]] | None:
@@ -393,28 +393,6 @@ def _planned_view(path: Path, record: dict[str, Any]) -> tuple[np.ndarray, tuple
     the executed grasp point in that camera; None if the log lacks them."""
     view = first_view(path) if record.get("grasp_world") else None
     return None if view is None else (view.depth, view.pixel(record["grasp_world"]))
-
-
-def _camera_pose(path: Path) -> np.ndarray:
-    """World-from-camera pose from the log's /tf stream."""
-    from suctionbench.runlog.reader import iter_messages
-
-    for _, msg in iter_messages(path, "/tf"):
-        for tf in msg.get("transforms", []):
-            if tf.get("child_frame_id") == "camera":
-                t, r = tf["translation"], tf["rotation"]
-                return _transform(np.array([t["x"], t["y"], t["z"]]), np.array([r["w"], r["x"], r["y"], r["z"]]))
-    raise InputError(f"run log '{path}': no camera transform")
-
-
-def _transform(translation: np.ndarray, quat_wxyz: np.ndarray) -> np.ndarray:
-    import mujoco
-
-    rot = np.zeros(9)
-    mujoco.mju_quat2Mat(rot, quat_wxyz)
-    pose = np.eye(4)
-    pose[:3, :3], pose[:3, 3] = rot.reshape(3, 3), translation
-    return pose
 
 
 def _crop(depth: np.ndarray, u: int, v: int, half: int) -> np.ndarray:

@@ -153,6 +153,22 @@ def iter_messages(path: str | os.PathLike, topic: str) -> Iterator[tuple[float, 
     return messages()
 
 
+def frame_pose(path: str | os.PathLike, frame: str) -> np.ndarray:
+    """World-from-`frame` transform (4, 4) at the log's first /tf message that holds `frame` (the
+    camera's, or the object's placement before the cup moves it). InputError if none does."""
+    for _, message in iter_messages(path, "/tf"):
+        for tf in message.get("transforms", []):
+            if tf.get("child_frame_id") == frame:
+                from scipy.spatial.transform import Rotation
+
+                t, q = tf["translation"], tf["rotation"]
+                pose = np.eye(4)
+                pose[:3, :3] = Rotation.from_quat([q["x"], q["y"], q["z"], q["w"]]).as_matrix()
+                pose[:3, 3] = [t["x"], t["y"], t["z"]]
+                return pose
+    raise _fail(Path(path), f"no {frame} transform")
+
+
 def float_image(message: dict[str, Any], what: str = "image") -> np.ndarray:
     """The float32 (height, width) image of a 32FC1 RawImage message: /camera/depth (metres) or
     /grasps/quality_map (q, NaN where unscored); `what` names it in errors."""

@@ -17,9 +17,11 @@ import suctionbench  # noqa: F401  (registers the environments)
 from suctionbench.cli import app
 from suctionbench.clutter.planning import path_is_clear
 from suctionbench.clutter.tasks import BinTask, load_bin_task
+from suctionbench.config import to_dict
 from suctionbench.errors import InputError
 from suctionbench.evaluation.tasks import is_bin_task
 from suctionbench.policies.gqcnn import DEFAULT_MODEL
+from suctionbench.policies.plugins import load_policy
 from suctionbench.sensing.camera import CameraIntrinsics
 from suctionbench.sensing.segmentation import segment_regions
 
@@ -191,6 +193,12 @@ def test_bin_smoke_eval_from_the_cli(tmp_path, policy):
     assert (out / "bins" / "bin_0000.mcap").stat().st_size > 0
     # the run names the model a GQ-CNN policy planned with (the shipped default: none was given)
     assert run["model_used"] == ("assets/" + "/".join(DEFAULT_MODEL) if "gqcnn" in policy else None)
+    # and the config it planned with, defaults included (a default that changes later, such as
+    # the seed cone, leaves the run readable); the known-state policy has none
+    if policy == "analytic":
+        assert run["policy_config"] is None
+    else:
+        assert run["policy_config"] == to_dict(load_policy(policy, {}).config)
     (record,) = run["bins"]
     attempts = record["attempts"]
     assert attempts and summary["metrics"]["attempts"] == len(attempts)

@@ -73,16 +73,19 @@ def run_bin_eval(task: BinTask, policy: str, out: Path, *, model: str | None = N
     from suctionbench.clutter.runner import MASK_SOURCES, bin_metrics
     from suctionbench.config import cup_preset
     from suctionbench.evaluation.cycle import CYCLE_MODEL
-    from suctionbench.evaluation.runner import _invocation, _versions
+    from suctionbench.evaluation.runner import _invocation, _versions, built_policy_config
     from suctionbench.io import atomic_dir, json_safe
     from suctionbench.parallel import map_ordered
     from suctionbench.policies.gqcnn import model_used
     from suctionbench.sensing.camera import resolve_camera
+    from suctionbench.sim.pick import KNOWN_STATE_POLICIES
 
     if masks not in MASK_SOURCES:
         raise InputError(f"--masks '{masks}': expected one of {', '.join(MASK_SOURCES)}")
     cup_config = cup_preset(cup)
     resolve_camera(camera)  # a bad camera fails before any work
+    # What the policy was built with, defaults included (None for the known-state policies).
+    policy_config = None if policy in KNOWN_STATE_POLICIES else built_policy_config(policy, policy_args or {}, model)
     if out.is_dir() and any(out.iterdir()) and not overwrite:
         raise InputError(f"--out '{out}': not empty; pass --overwrite to replace a bin run there")
     if seed is not None:
@@ -101,6 +104,7 @@ def run_bin_eval(task: BinTask, policy: str, out: Path, *, model: str | None = N
                 progress(1)
         run = {
             "kind": RUN_KIND, "task": task.name, "policy": policy, "policy_args": policy_args or {},
+            "policy_config": policy_config,
             "model": model, "model_used": model_used(policy, model, policy_args), "masks": masks, "cup": cup,
             "camera": camera, "seed": task.seed, "trials": count,
             "compute_model": compute, "command": _invocation(), "versions": _versions(),

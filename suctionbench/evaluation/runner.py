@@ -103,7 +103,7 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
     interrupted run was finished, "trials_reused" counts its trial logs that were kept."""
     from suctionbench.policies.base import MODEL_POLICIES
     from suctionbench.policies.gqcnn import model_used
-    from suctionbench.policies.plugins import builtin_name, canonical_spec, load_policy, policy_label
+    from suctionbench.policies.plugins import builtin_name, canonical_spec, policy_label
     from suctionbench.sensing.camera import resolve_camera
 
     policy_args = dict(policy_args or {})
@@ -119,14 +119,10 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
         spec, policy_config = policy, None
     else:
         spec = canonical_spec(policy)
-        kwargs = dict(policy_args)
         if reads_model:
-            _check_model(kwargs.get("model", model))
-            if model:
-                kwargs.setdefault("model", model)
-        # Unknown policy or bad options -> InputError before any work. The run records the built
-        # config, defaults included, so that a run stays readable when a default changes.
-        policy_config = _config_record(load_policy(spec, kwargs))
+            _check_model(dict(policy_args).get("model", model))
+        # Unknown policy or bad options -> InputError before any work.
+        policy_config = built_policy_config(spec, policy_args, model)
     intrinsics = resolve_camera(camera)
     camera_spec = str(Path(camera).resolve()) if Path(str(camera)).is_file() else intrinsics.name
     from suctionbench.config import cup_preset
@@ -314,11 +310,19 @@ def remove_run(run_dir: Path) -> None:
     shutil.rmtree(run_dir)
 
 
-def _config_record(policy: Any) -> dict[str, Any] | None:
-    """A built-in policy's config as a dict (every field, defaults included); None for a plug-in."""
+def built_policy_config(spec: str, policy_args: dict[str, Any], model: str | None) -> dict[str, Any] | None:
+    """Build the policy `spec` with `policy_args` (and `model` where it reads one) and return its
+    config as a dict, every field with defaults included, so that a run stays readable when a
+    default changes; None for a plug-in without a dataclass config. InputError for an unknown
+    policy or bad options, before any work."""
     from suctionbench.config import to_dict
+    from suctionbench.policies.base import MODEL_POLICIES
+    from suctionbench.policies.plugins import builtin_name, load_policy
 
-    config = getattr(policy, "config", None)
+    kwargs = dict(policy_args)
+    if model and builtin_name(spec) in MODEL_POLICIES:
+        kwargs.setdefault("model", model)
+    config = getattr(load_policy(spec, kwargs), "config", None)
     return to_dict(config) if dataclasses.is_dataclass(config) and not isinstance(config, type) else None
 
 

@@ -199,6 +199,40 @@ def test_the_training_mass_prior_changes_masses_only():
         corpus_specs(1, seed=1, masses="lead")
 
 
+def test_filled_containers_change_masses_only_and_hold_their_contents():
+    # --masses filled draws each container's contents from its own stream (seed, index, 3): shapes,
+    # parameters and every other object's mass are the material corpus's. A filled container weighs
+    # its shell plus rho x (share of the enclosed volume V) of its contents, and the contents sit
+    # at its bottom: the part of a body below a horizontal level has its centroid below the level,
+    # the rest above it, and the whole's centroid is their volume-weighted mean, so for a share < 1
+    # the contents' centre of mass lies strictly below the enclosed volume's centroid.
+    from suctionbench.objects.corpus import corpus_specs
+    from suctionbench.objects.corpus_priors import CONTAINER_KINDS, FILL_FRACTION
+    from suctionbench.objects.mass import contents_properties, resolve_mass
+    from suctionbench.objects.shapes import make_shape
+
+    material, filled = corpus_specs(150, seed=1), corpus_specs(150, seed=1, masses="filled")
+    assert [(s.name, s.generator, s.params) for s in material] == [(s.name, s.generator, s.params) for s in filled]
+    changed = [(a, b) for a, b in zip(material, filled, strict=True) if a.mass != b.mass]
+    assert changed and all(b.generator in CONTAINER_KINDS for _, b in changed)
+    _, spec = changed[0]
+    mesh = make_shape(spec.generator, spec.params)
+    model = spec.mass
+    share = model.contents_volume / mesh.volume
+    assert FILL_FRACTION[0] <= share <= FILL_FRACTION[1]
+    density = model.contents / model.contents_volume
+    assert 1000.0 <= density <= 1080.0  # the contents: water to peanut butter
+    props = mass_properties(mesh, model)
+    assert props.mass == pytest.approx(shell_properties(mesh, model.shell).mass + density * share * mesh.volume,
+                                       rel=1e-6)
+    contents = contents_properties(mesh, model.contents, model.contents_volume)
+    assert contents.com[2] < mesh.center_mass[2]
+    # under the cap it holds the drawn share, or a half, a quarter, or nothing of it
+    chosen, chosen_props = resolve_mass(mesh, model, spec.name)
+    assert chosen_props.mass <= CUP_DEFAULT.mass_cap_kg
+    assert chosen.contents_volume in (None, model.contents_volume, model.contents_volume / 2, model.contents_volume / 4)
+
+
 def test_pickability_flags_a_lying_triangular_prism():
     # Lying on a rectangular face, a triangular prism's other faces are tilted 60 deg from the
     # horizontal and its ends are vertical: under gqcnn's 30 deg cone no surface normal lies within

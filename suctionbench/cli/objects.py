@@ -197,9 +197,10 @@ def objects_generate(
     count: Annotated[int, typer.Option(help="Number of training objects.")] = 1500,
     out: Annotated[Path, typer.Option(help="Corpus directory (objects are cached there).")] = Path("corpus"),
     workers: Annotated[int, typer.Option(help="Parallel processes (0 = all cores).")] = 0,
-    masses: Annotated[str, typer.Option(help="Object masses: 'material' (each shape's own material) or "
+    masses: Annotated[str, typer.Option(help="Object masses: 'material' (each shape's own material), "
                                              "'prior' (the training mass prior: carton, print, wood, plastic, "
-                                             "full container, metal).")] = "material",
+                                             "full container, metal) or 'filled' (material, with bottles, jugs "
+                                             "and cans part-filled with liquids or a paste).")] = "material",
     sizes: Annotated[str, typer.Option(help="Object sizes: 'family' (each shape family's own range) or 'items' "
                                             "(generic shapes scaled to real items' 4-24.5 cm).")] = "family",
     seed: SeedOpt = 0,

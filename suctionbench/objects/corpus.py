@@ -9,7 +9,7 @@ Spec i of a corpus depends only on (seed, i): its random stream is np.random.def
 so any slice can be regenerated alone. Every draw is built and checked (watertight, one body,
 2-25 cm, at most MAX_FACES faces); a draw that fails is redrawn from the same stream. What each
 shape weighs and its scale come from `objects.corpus_priors` (named materials under the evaluation
-sets' mass cap by default; `--masses prior`, `--sizes items`).
+sets' mass cap by default; `--masses prior` or `filled`, `--sizes items`).
 """
 
 from __future__ import annotations
@@ -29,7 +29,15 @@ from suctionbench.errors import InputError
 from suctionbench.geometry.mesh import validate_mesh
 from suctionbench.objects.adversarial import radial_sphere, to_trimesh
 from suctionbench.objects.build import MAX_FACES
-from suctionbench.objects.corpus_priors import ITEM_SIZES, check_mass_mode, check_size_mode, corpus_mass, prior_mass
+from suctionbench.objects.corpus_priors import (
+    CONTAINER_KINDS,
+    ITEM_SIZES,
+    check_mass_mode,
+    check_size_mode,
+    corpus_mass,
+    filled_mass,
+    prior_mass,
+)
 from suctionbench.objects.shapes import GENERATORS, generator, make_shape
 from suctionbench.objects.spec import ObjectSpec
 
@@ -466,8 +474,8 @@ def check_shape(mesh: trimesh.Trimesh) -> str | None:
 
 def corpus_spec(seed: int, index: int, masses: str = "material", sizes: str = "family") -> ObjectSpec:
     """Spec `index` of the corpus drawn with `seed`: depends only on (seed, index) (and `masses`,
-    MASS_MODES, which sets its mass and nothing else, and `sizes`, SIZE_MODES, which sets its
-    scale and, through it, its mass).
+    MASS_MODES, which sets its mass and nothing else, from its own streams (seed, index, 1 or 3),
+    and `sizes`, SIZE_MODES, which sets its scale and, through it, its mass).
 
     The category is drawn first, always from the full CORPUS_CATEGORIES (a household draw becomes
     composite when no household generator is registered, so other specs do not shift). Then
@@ -504,13 +512,19 @@ def corpus_spec(seed: int, index: int, masses: str = "material", sizes: str = "f
         params = plain(params)
     kind = params["generator"] if gen == "scaled" else gen
     scaled = f", scaled x{params['factor']:.3g}" if gen == "scaled" else ""
+    if masses == "prior":
+        mass = prior_mass(kind, np.random.default_rng((seed, index, 1)))
+    elif masses == "filled" and kind in CONTAINER_KINDS:  # a container is never the fallback primitive
+        mass = filled_mass(kind, float(mesh.volume), np.random.default_rng((seed, index, 3)))
+    else:
+        mass = corpus_mass(kind)
     return ObjectSpec(
         name=f"train_{index:05d}_{category}",
         set="train",
         generator=gen,
         params=params,
         description=f"training corpus: {category} ({kind}{scaled})",
-        mass=corpus_mass(kind) if masses == "material" else prior_mass(kind, np.random.default_rng((seed, index, 1))),
+        mass=mass,
     )
 
 

@@ -52,8 +52,9 @@ def generate_corpus(
     masses: str = "material", sizes: str = "family",
 ) -> dict[str, Any]:
     """Build `count` corpus objects into out/train/ (reusing cached ones); write out/corpus.json.
-    `masses`: each shape's own material or the training mass prior (corpus_priors.MASS_MODES); `sizes`:
-    each family's own size range or real items' (corpus_priors.SIZE_MODES)."""
+    `masses`: each shape's own material, the training mass prior, or containers part-filled
+    (corpus_priors.MASS_MODES); `sizes`: each family's own size range or real items'
+    (corpus_priors.SIZE_MODES)."""
     from suctionbench.objects.corpus import corpus_specs
 
     start = time.perf_counter()

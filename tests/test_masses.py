@@ -233,6 +233,25 @@ def test_filled_containers_change_masses_only_and_hold_their_contents():
     assert chosen.contents_volume in (None, model.contents_volume, model.contents_volume / 2, model.contents_volume / 4)
 
 
+def test_a_corpus_folder_rebuilds_a_container_built_with_another_mass_mode(tmp_path):
+    # Corpus objects are cached by folder; an empty bottle built by `--masses material` must not
+    # stand in for the same bottle part-filled by `--masses filled` (its empty shell is one of the
+    # filled model's lighter variants, but not the one the cap chooses for it), and the reverse.
+    from suctionbench.objects.corpus import corpus_spec
+    from suctionbench.objects.corpus_build import _cached, build_specs
+    from suctionbench.objects.shapes import register_all
+
+    register_all()  # as corpus_specs does: a spec's category depends on the household kinds being known
+    empty, filled = corpus_spec(1, 29, "material"), corpus_spec(1, 29, "filled")  # a bottle (index 29, seed 1)
+    assert filled.generator == "household_bottle" and filled.mass.contents > 0
+    folder = tmp_path / empty.set / empty.name
+    (built,) = build_specs([empty], tmp_path, workers=1, decompose=False)
+    assert _cached(folder, empty) is not None and _cached(folder, filled) is None
+    (built,) = build_specs([filled], tmp_path, workers=1, decompose=False)
+    assert built.mass > ObjectRecord.load(folder).mass - 1e-12 and built.mass_model.get("contents", 0) > 0
+    assert _cached(folder, filled) is not None and _cached(folder, empty) is None
+
+
 def test_pickability_flags_a_lying_triangular_prism():
     # Lying on a rectangular face, a triangular prism's other faces are tilted 60 deg from the
     # horizontal and its ends are vertical: under gqcnn's 30 deg cone no surface normal lies within

@@ -21,9 +21,10 @@ from suctionbench.objects.spec import SETS
 
 def _cached(directory: Path, spec: Any) -> ObjectRecord | None:
     """The built object at `directory` if it exists and was built from exactly `spec`: same generator
-    and parameters, and its mass from the spec's mass model (or one of its lighter variants), so
-    objects built before real masses are rebuilt."""
-    from suctionbench.objects.mass import variants
+    and parameters, and its mass from the spec's mass model, or from the lighter variant the mass
+    cap chooses for this shape, so objects built before real masses, or with another `--masses`
+    mode into the same folder (an empty bottle where this spec fills it), are rebuilt."""
+    from suctionbench.objects.mass import resolve_mass, variants
 
     try:
         record = ObjectRecord.load(directory)
@@ -31,9 +32,15 @@ def _cached(directory: Path, spec: Any) -> ObjectRecord | None:
         return None
     if (record.generator, record.params) != (spec.generator, spec.params):
         return None
-    sources = {v.source for v in variants(spec.mass_model())}
-    fresh = any(record.mass_source == s or record.mass_source.startswith(s + "; ") for s in sources)  # floor note
-    return record if fresh else None
+    chain = variants(spec.mass_model())
+    matched = [i for i, v in enumerate(chain)  # "; ...": a floor note
+               if record.mass_source == v.source or record.mass_source.startswith(v.source + "; ")]
+    if not matched:
+        return None
+    if matched[0] == 0:
+        return record
+    chosen, _ = resolve_mass(record.mesh(), chain[0], spec.name, spec.params, keep_above_cap=True)
+    return record if chosen.source == chain[matched[0]].source else None
 
 
 def evaluation_fingerprints() -> tuple[set[str], set[str]]:

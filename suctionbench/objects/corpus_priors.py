@@ -129,8 +129,8 @@ def filled_mass(generator_name: str, volume: float, rng: np.random.Generator) ->
     levels = "a liquid: level in any pose it rests in" if contents.flows else "frozen as filled"
     model = base
     for share in (fraction / 4.0, fraction / 2.0, fraction):  # built lightest first: each falls back to the next
-        model = MassModel(f"{base.source}, holding {share * 100:.3g} % of its volume of {contents.source} filled from the "
-                          f"bottom ({levels})", shell=base.shell, contents=share * volume * contents.density,
+        model = MassModel(f"{base.source}, holding {share * 100:.3g} % of its volume of {contents.source} filled "
+                          f"from the bottom ({levels})", shell=base.shell, contents=share * volume * contents.density,
                           contents_volume=share * volume, liquid=contents.flows, lighter=(model,))
     return model
 

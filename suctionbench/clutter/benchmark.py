@@ -78,14 +78,12 @@ def run_bin_eval(task: BinTask, policy: str, out: Path, *, model: str | None = N
     from suctionbench.parallel import map_ordered
     from suctionbench.policies.gqcnn import model_used
     from suctionbench.sensing.camera import resolve_camera
-    from suctionbench.sim.pick import KNOWN_STATE_POLICIES
 
     if masks not in MASK_SOURCES:
         raise InputError(f"--masks '{masks}': expected one of {', '.join(MASK_SOURCES)}")
     cup_config = cup_preset(cup)
     resolve_camera(camera)  # a bad camera fails before any work
-    # What the policy was built with, defaults included (None for the known-state policies).
-    policy_config = None if policy in KNOWN_STATE_POLICIES else built_policy_config(policy, policy_args or {}, model)
+    policy_config = built_policy_config(policy, policy_args or {}, model)  # bad options fail before any work
     if out.is_dir() and any(out.iterdir()) and not overwrite:
         raise InputError(f"--out '{out}': not empty; pass --overwrite to replace a bin run there")
     if seed is not None:

@@ -105,6 +105,7 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
     from suctionbench.policies.gqcnn import model_used
     from suctionbench.policies.plugins import builtin_name, canonical_spec, policy_label
     from suctionbench.sensing.camera import resolve_camera
+    from suctionbench.sim.pick import KNOWN_STATE_POLICIES
 
     policy_args = dict(policy_args or {})
     label = policy_label(policy, policy_args)
@@ -113,16 +114,16 @@ def run_eval(task: Task, policy: str, out: Path, *, model: str | None = None, tr
     if model and not reads_model:
         raise InputError(f"--model: policy '{policy}' reads no model given this way (only "
                          f"{', '.join(MODEL_POLICIES)} do); a plug-in takes its options with --policy-arg")
-    if policy in ("analytic", "random-surface"):
+    if policy in KNOWN_STATE_POLICIES:
         if policy_args:
             raise InputError(f"--policy-arg: the known-state policy '{policy}' takes no options")
-        spec, policy_config = policy, None
+        spec = policy
     else:
         spec = canonical_spec(policy)
         if reads_model:
-            _check_model(dict(policy_args).get("model", model))
-        # Unknown policy or bad options -> InputError before any work.
-        policy_config = built_policy_config(spec, policy_args, model)
+            _check_model(policy_args.get("model", model))
+    # Unknown policy or bad options -> InputError before any work.
+    policy_config = built_policy_config(spec, policy_args, model)
     intrinsics = resolve_camera(camera)
     camera_spec = str(Path(camera).resolve()) if Path(str(camera)).is_file() else intrinsics.name
     from suctionbench.config import cup_preset
@@ -313,12 +314,16 @@ def remove_run(run_dir: Path) -> None:
 def built_policy_config(spec: str, policy_args: dict[str, Any], model: str | None) -> dict[str, Any] | None:
     """Build the policy `spec` with `policy_args` (and `model` where it reads one) and return its
     config as a dict, every field with defaults included, so that a run stays readable when a
-    default changes; None for a plug-in without a dataclass config. InputError for an unknown
-    policy or bad options, before any work."""
+    default changes; None for the known-state policies (planned in the simulation, not built) and
+    for a plug-in without a dataclass config. InputError for an unknown policy or bad options,
+    before any work."""
     from suctionbench.config import to_dict
     from suctionbench.policies.base import MODEL_POLICIES
     from suctionbench.policies.plugins import builtin_name, load_policy
+    from suctionbench.sim.pick import KNOWN_STATE_POLICIES
 
+    if spec in KNOWN_STATE_POLICIES:
+        return None
     kwargs = dict(policy_args)
     if model and builtin_name(spec) in MODEL_POLICIES:
         kwargs.setdefault("model", model)

@@ -33,14 +33,14 @@ def _cached(directory: Path, spec: Any) -> ObjectRecord | None:
     if (record.generator, record.params) != (spec.generator, spec.params):
         return None
     chain = variants(spec.mass_model())
-    matched = [i for i, v in enumerate(chain)  # "; ...": a floor note
-               if record.mass_source == v.source or record.mass_source.startswith(v.source + "; ")]
-    if not matched:
+    matched = next((v for v in chain  # "; ...": a floor note
+                    if record.mass_source == v.source or record.mass_source.startswith(v.source + "; ")), None)
+    if matched is None:
         return None
-    if matched[0] == 0:
+    if matched is chain[0]:
         return record
     chosen, _ = resolve_mass(record.mesh(), chain[0], spec.name, spec.params, keep_above_cap=True)
-    return record if chosen.source == chain[matched[0]].source else None
+    return record if chosen.source == matched.source else None
 
 
 def evaluation_fingerprints() -> tuple[set[str], set[str]]:

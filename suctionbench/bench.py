@@ -450,7 +450,8 @@ def bench_train(*, archs: list[str], datapoints: int, reference_datapoints: int,
     import torch
 
     from suctionbench.learning.models import build_model, count_parameters
-    from suctionbench.learning.train import TrainConfig, _device, train
+    from suctionbench.learning.train import _device, train
+    from suctionbench.learning.train_config import TrainConfig
 
     used_cores = _limit_cores(cores)
     if datapoints < 1000 or not 1000 <= reference_datapoints <= datapoints:

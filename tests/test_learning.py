@@ -41,7 +41,8 @@ from suctionbench.learning.models import (
     count_parameters,
     tf_lrn_to_torch,
 )
-from suctionbench.learning.train import TrainConfig, _loss, decision_threshold, evaluate, train
+from suctionbench.learning.train import _loss, evaluate, train
+from suctionbench.learning.train_config import TrainConfig, decision_threshold
 from suctionbench.sensing.noise import DepthNoiseConfig
 from suctionbench.sensing.thumbnails import (
     THUMBNAIL_GQCNN,

@@ -5,7 +5,7 @@ Scores the model on the dataset's object-wise validation split (the subset `suct
 score --max-datapoints N --seed S` scores) and splits datapoints by the dataset's `seal_flags` (the
 unperturbed grasp seals) and `wrench_resistance` (it seals and resists the pick's loads). Per
 cell: share of the datapoints, the robust label's positive rate, the model's accuracy at its
-decision threshold (`learning.train.decision_threshold`) and its share of all errors. Seal is a
+decision threshold (`learning.train_config.decision_threshold`) and its share of all errors. Seal is a
 matter of the surface under the cup (what the grasp thumbnail shows); resistance, once sealed, of
 the load: the object's weight and its moment about the grasp (mass and centre of mass, which a
 depth image shows only in part).

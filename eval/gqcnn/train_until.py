@@ -17,7 +17,8 @@ import json
 import time
 
 from suctionbench.cli.train import train_command
-from suctionbench.learning.train import TrainConfig, train
+from suctionbench.learning.train import train
+from suctionbench.learning.train_config import TrainConfig
 
 
 def main() -> None:

@@ -99,7 +99,8 @@ def train_cmd(
     def body() -> dict[str, Any]:
         from suctionbench.dataset.verify import check_dataset, record_check
         from suctionbench.learning.data import AUGMENT_FLIPS, AUGMENT_GQCNN, AUGMENT_OFF
-        from suctionbench.learning.train import TrainConfig, train
+        from suctionbench.learning.train import train
+        from suctionbench.learning.train_config import TrainConfig
 
         checked = check_dataset(dataset)  # never train on a damaged dataset or NaN labels
 

@@ -92,7 +92,7 @@ class GQCNNModel:
 
     @property
     def target(self) -> str:
-        """What the network was trained to fit (`learning.train.TARGETS`); models from before the
+        """What the network was trained to fit (`learning.train_config.TARGETS`); models from before the
         choice existed were trained on the binary label."""
         return self.card.get("label", {}).get("target", "binary")
 

@@ -164,7 +164,7 @@ def test_labeller_motion_is_the_episodes():
     # height and time (EpisodeConfig: height / mean speed), and a lift acceleration equal to that
     # min-jerk lift's peak 5.774 H / T^2.
     from suctionbench.config import PerturbationConfig
-    from suctionbench.sim.episode import EpisodeConfig
+    from suctionbench.sim.episode_config import EpisodeConfig
 
     episode, labels = EpisodeConfig(), PerturbationConfig.for_episode(CUP_DEFAULT)
     assert labels.lift_height == episode.lift_height

@@ -14,7 +14,7 @@ from suctionbench.evaluation.runner import plan_trials
 from suctionbench.evaluation.tasks import load_task
 from suctionbench.policies.gqcnn import DEFAULT_MODEL
 from suctionbench.runlog.reader import read_run
-from suctionbench.sim.episode import FAILURES
+from suctionbench.sim.episode_config import FAILURES
 
 POLICIES = ["random", "centroid", "planarity", "planarity-centroid", "gqcnn", "fc-gqcnn", "gqcnn-adv", "analytic",
             "random-surface"]

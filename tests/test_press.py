@@ -125,7 +125,7 @@ def test_the_labellers_press_is_the_episodes_touch_down():
     # The press is the episode's: its guarded approach stops at EpisodeConfig.compression_stop of
     # the bellows, and the object lies on the scene's table (SceneConfig.friction; MuJoCo takes the
     # larger of two coefficients and the objects' are at most 0.5).
-    from suctionbench.sim.episode import EpisodeConfig
+    from suctionbench.sim.episode_config import EpisodeConfig
     from suctionbench.sim.scene import SceneConfig
 
     labels = PerturbationConfig.for_episode(CUP_DEFAULT)

@@ -19,7 +19,7 @@ from suctionbench.config import CUP_DEFAULT, STANDARD_GRAVITY
 from suctionbench.objects.build import build_object
 from suctionbench.objects.registry import list_objects, load_object
 from suctionbench.objects.spec import SETS, ObjectSpec
-from suctionbench.sim.episode import EpisodeConfig
+from suctionbench.sim.episode_config import EpisodeConfig
 from suctionbench.sim.ik import solve_ik
 from suctionbench.sim.pick import PickRequest, PickRunner
 from suctionbench.sim.yumi import HOME_RIGHT, RIGHT_ARM_JOINTS

@@ -37,15 +37,8 @@ import numpy as np
 
 from suctionbench.clutter.scene import PICK_BIN, PickBinConfig
 from suctionbench.config import STANDARD_GRAVITY
-from suctionbench.sim.episode import (
-    FAILURES,
-    EpisodeConfig,
-    EpisodeResult,
-    PickEpisode,
-    _Failure,
-    _random_quat,
-    _Unstable,
-)
+from suctionbench.sim.episode import PickEpisode, _Failure, _random_quat, _Unstable
+from suctionbench.sim.episode_config import FAILURES, EpisodeConfig, EpisodeResult
 from suctionbench.sim.scene import Scene
 
 CLUTTER_FAILURES = FAILURES + ("collision_bin", "collision_neighbour", "two_lifted", "dragged_out", "missed_receptacle")

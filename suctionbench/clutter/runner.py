@@ -209,7 +209,7 @@ class BinRunner:
         try:
             point, approach, q, info = self.plan(index)
         except NoGraspError as exc:
-            from suctionbench.sim.episode import EpisodeResult
+            from suctionbench.sim.episode_config import EpisodeResult
 
             result = AttemptResult(EpisodeResult.not_executed("no_grasp", str(exc)), None, None)
             return self._record(index, None, None, dict(NO_LABELS), time.perf_counter() - plan_start, {}, result)

@@ -19,7 +19,7 @@ from suctionbench.config import cup_preset
 from suctionbench.envs.suction_pick import ACTION_HIGH, ACTION_LOW, MIN_APPROACH_NORM, image_spaces
 from suctionbench.errors import InputError
 from suctionbench.sensing.camera import resolve_camera
-from suctionbench.sim.episode import EpisodeResult
+from suctionbench.sim.episode_config import EpisodeResult
 from suctionbench.sim.pick import NO_LABELS
 
 _SEED_BOUND = 2**31

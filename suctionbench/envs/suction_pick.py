@@ -21,7 +21,7 @@ from suctionbench.config import cup_preset
 from suctionbench.errors import InputError
 from suctionbench.objects.registry import list_objects
 from suctionbench.sensing.camera import resolve_camera
-from suctionbench.sim.episode import EpisodeResult
+from suctionbench.sim.episode_config import EpisodeResult
 from suctionbench.sim.pick import NO_LABELS, PickRequest, PickRunner
 
 ACTION_LOW = np.array([-1.0, -1.0, 0.0, -1.0, -1.0, -1.0], dtype=np.float32)
@@ -138,7 +138,7 @@ class SuctionPickEnv(gymnasium.Env):
     `reset` returns `{"object": "SET/NAME"}`. `step` returns:
 
     - `object`, `attempt` (1 for the first attempt of the episode).
-    - `success`, `valid`, `failure` (None, one of `suctionbench.sim.episode.FAILURES`, or
+    - `success`, `valid`, `failure` (None, one of `suctionbench.sim.episode_config.FAILURES`, or
       `"invalid_action"`) and `detail` (what made an attempt invalid).
     - `label_seal`, `label_wr`, `label_rwr`: the analytic labels (seal formed, wrench resisted,
       robust wrench resistance) of the executed grasp in the true object state at the moment of

@@ -21,7 +21,8 @@ from suctionbench.objects.registry import load_object
 from suctionbench.policies.base import NoGraspError
 from suctionbench.sensing.camera import CameraPoseConfig, resolve_camera, sample_camera_pose
 from suctionbench.sim.cup import SIM_CUP_DEFAULT, SimCupConfig
-from suctionbench.sim.episode import EpisodeConfig, EpisodeResult, PickEpisode
+from suctionbench.sim.episode import PickEpisode
+from suctionbench.sim.episode_config import EpisodeConfig, EpisodeResult
 from suctionbench.sim.scene import SceneConfig, build_scene
 
 KNOWN_STATE_POLICIES = ("analytic", "random-surface")

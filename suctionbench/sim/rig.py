@@ -27,7 +27,7 @@ from suctionbench.sim.cup import (
     add_suction_tool,
     expose_to_vacuum,
 )
-from suctionbench.sim.episode import EpisodeConfig
+from suctionbench.sim.episode_config import EpisodeConfig
 from suctionbench.sim.suction import SuctionController
 
 CARRIAGE_MASS = 5.0

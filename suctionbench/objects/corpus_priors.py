@@ -47,11 +47,11 @@ def scaled(generator: str, params: dict[str, Any], factor: float) -> trimesh.Tri
 
 
 def corpus_mass(generator_name: str) -> MassModel:
-    """What a corpus object is made of: a household kind its kind's material (objects.household.
+    """What a corpus object is made of: a household kind its kind's material (objects.typical.
     HOUSEHOLD_MASS: porcelain mugs, steel wrenches, empty plastic bottles ...), every other shape a
     PLA print (objects.mass.printed). Both fall back to lighter prints (lower infill) where they
     would weigh more than the cup's mass cap, so corpus masses obey the evaluation sets' cap."""
-    from suctionbench.objects.household import HOUSEHOLD_MASS
+    from suctionbench.objects.typical import HOUSEHOLD_MASS
 
     return HOUSEHOLD_MASS.get(generator_name) or printed()
 
@@ -60,7 +60,7 @@ def prior_mass(generator_name: str, rng: np.random.Generator) -> MassModel:
     """What a corpus object is made of under the training mass prior: a household kind its kind's
     material (as `corpus_mass`), every other shape one of TRAINING_MAKES drawn with equal
     probability (falling back to a lighter print where it would exceed the cap)."""
-    from suctionbench.objects.household import HOUSEHOLD_MASS
+    from suctionbench.objects.typical import HOUSEHOLD_MASS
 
     if generator_name in HOUSEHOLD_MASS:
         return HOUSEHOLD_MASS[generator_name]

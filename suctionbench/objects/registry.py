@@ -15,8 +15,8 @@ from suctionbench.resources import asset_path
 def eval_specs() -> dict[str, list[ObjectSpec]]:
     """The committed evaluation sets' specs, by set name."""
     from suctionbench.objects.adversarial import ADVERSARIAL_SPECS
-    from suctionbench.objects.household import TYPICAL_SPECS
     from suctionbench.objects.sets import BASIC_SPECS
+    from suctionbench.objects.typical import TYPICAL_SPECS
 
     return {"basic": BASIC_SPECS, "typical": TYPICAL_SPECS, "adversarial": ADVERSARIAL_SPECS}
 

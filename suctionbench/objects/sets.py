@@ -1,4 +1,4 @@
-"""The evaluation sets: Basic (here), Typical (household.py), Adversarial (adversarial.py).
+"""The evaluation sets: Basic (here), Typical (typical.py), Adversarial (adversarial.py).
 
 Basic follows the paper: prismatic solids - boxes of many aspect ratios, cylinders, prisms and
 tubes - at household sizes (2-25 cm). Specs are explicit, so names and shapes never drift. Each

@@ -200,7 +200,8 @@ def bench_generate(*, objects: str, datapoints: int, workers: int, seed: int) ->
     from suctionbench.dataset.render import TableScene
     from suctionbench.geometry.sampling import sample_surface_grasps
     from suctionbench.objects.registry import resolve_objects
-    from suctionbench.sensing.camera import CameraPoseConfig, camera_preset, sample_camera_pose
+    from suctionbench.sensing.camera import camera_preset
+    from suctionbench.sensing.camera_pose import CameraPoseConfig, sample_camera_pose
     from suctionbench.validate import BYTES_PER_DATAPOINT, require_disk
 
     if datapoints < 1 or workers < 1:

@@ -15,19 +15,21 @@ from scipy import ndimage, stats  # noqa: E402
 
 from suctionbench.errors import InputError  # noqa: E402
 from suctionbench.sensing.camera import (  # noqa: E402
-    CAMERA_POSE_PAPER,
     CAMERA_PRESETS,
     MUJOCO_FROM_OPENCV,
     PRIMESENSE,
     CameraIntrinsics,
-    CameraPoseConfig,
     DepthRenderer,
     add_camera,
     camera_pose_from_data,
-    camera_pose_from_spherical,
     camera_preset,
     load_intrinsics_toml,
     resolve_camera,
+)
+from suctionbench.sensing.camera_pose import (  # noqa: E402
+    CAMERA_POSE_PAPER,
+    CameraPoseConfig,
+    camera_pose_from_spherical,
     sample_camera_pose,
 )
 

@@ -27,7 +27,8 @@ from suctionbench.policies.base import (
     surface_normals,
 )
 from suctionbench.policies.gqcnn import CEMConfig, GQCNNPolicy, fit_gmm
-from suctionbench.sensing.camera import PRIMESENSE, sample_camera_pose
+from suctionbench.sensing.camera import PRIMESENSE
+from suctionbench.sensing.camera_pose import sample_camera_pose
 from suctionbench.sensing.noise import apply_axial_noise
 from suctionbench.sensing.thumbnails import (
     ThumbnailConfig,

@@ -19,7 +19,8 @@ from suctionbench.clutter.tasks import BinTask
 from suctionbench.config import CUP_DEFAULT, CupConfig
 from suctionbench.objects.registry import list_objects, load_object
 from suctionbench.policies.base import NoGraspError, Observation
-from suctionbench.sensing.camera import body_image, resolve_camera, sample_camera_pose
+from suctionbench.sensing.camera import body_image, resolve_camera
+from suctionbench.sensing.camera_pose import sample_camera_pose
 from suctionbench.sensing.segmentation import segment_regions, workspace_mask
 from suctionbench.sim.pick import KNOWN_STATE_POLICIES, NO_LABELS, cached_policy, grasp_labels
 

@@ -17,7 +17,8 @@ import numpy as np
 
 from suctionbench.config import CupConfig
 from suctionbench.objects.build import ObjectRecord
-from suctionbench.sensing.camera import CameraIntrinsics, CameraPoseConfig
+from suctionbench.sensing.camera import CameraIntrinsics
+from suctionbench.sensing.camera_pose import CameraPoseConfig
 from suctionbench.sim.cup import SimCupConfig
 from suctionbench.sim.scene import Scene, SceneConfig, add_open_box, assemble_scene
 

@@ -27,7 +27,8 @@ from suctionbench.contact import SuctionLabeller
 from suctionbench.dataset.generate import MAX_IMAGES_PER_UNIT, UNIT_FIELDS, _empty, image_object_context
 from suctionbench.geometry.sampling import sample_surface_grasps, smoothed_approaches
 from suctionbench.objects.build import ObjectRecord
-from suctionbench.sensing.camera import DepthRenderer, body_image, resolve_camera, sample_camera_pose
+from suctionbench.sensing.camera import DepthRenderer, body_image, resolve_camera
+from suctionbench.sensing.camera_pose import sample_camera_pose
 from suctionbench.sensing.noise import noisy_image
 from suctionbench.sensing.thumbnails import (
     extract_context_thumbnails,

@@ -187,7 +187,8 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
     from suctionbench.geometry.sampling import sample_surface_grasps, smoothed_approaches
     from suctionbench.objects.build import ObjectRecord
     from suctionbench.objects.liquid import Liquid, com_at_rest
-    from suctionbench.sensing.camera import CameraPoseConfig, resolve_camera, sample_camera_pose
+    from suctionbench.sensing.camera import resolve_camera
+    from suctionbench.sensing.camera_pose import CameraPoseConfig, sample_camera_pose
     from suctionbench.sensing.noise import noisy_image
     from suctionbench.sensing.thumbnails import (
         extract_context_thumbnails,

@@ -19,7 +19,8 @@ from suctionbench.errors import InputError
 from suctionbench.objects.build import ObjectRecord
 from suctionbench.objects.registry import load_object
 from suctionbench.policies.base import NoGraspError
-from suctionbench.sensing.camera import CameraPoseConfig, resolve_camera, sample_camera_pose
+from suctionbench.sensing.camera import resolve_camera
+from suctionbench.sensing.camera_pose import CameraPoseConfig, sample_camera_pose
 from suctionbench.sim.cup import SIM_CUP_DEFAULT, SimCupConfig
 from suctionbench.sim.episode import PickEpisode
 from suctionbench.sim.episode_config import EpisodeConfig, EpisodeResult

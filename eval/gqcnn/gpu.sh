@@ -79,7 +79,7 @@ first=${ARCHS%% *}
 cp "$WORK/models/$first/model.safetensors" "$OUT/$first.safetensors"
 
 log "4. held-out scores"
-models=(assets/models/gqcnn-context-pose-avg)  # the shipped default, as the reference
+models=(assets/models/gqcnn-context-pose-avg)  # the earlier default, trained on data cut as this script cuts it (96 px, paper noise)
 for arch in $ARCHS; do models+=("$WORK/models/$arch"); done
 timeout 40 $PY eval/bin/heldout.py "$WORK/data" "${models[@]}" | tee "$OUT/heldout.jsonl"
 log "done"

@@ -107,7 +107,7 @@ class BinEpisode(PickEpisode):
 
     def __init__(self, scene: Scene, bin_config: PickBinConfig | None = None,
                  config: EpisodeConfig | None = None, bin_episode: BinEpisodeConfig | None = None):
-        super().__init__(scene, config or EpisodeConfig())
+        super().__init__(scene, config)
         self.bin = bin_config or PickBinConfig()
         self.bin_episode = bin_episode or BinEpisodeConfig()
         m = self.model

@@ -29,6 +29,31 @@ def test_dense_equals_thumbnail_network_at_every_position():
     torch.testing.assert_close(got, want, rtol=1e-5, atol=1e-5)
 
 
+@pytest.mark.parametrize("stride", [2, 4])
+def test_strided_trunk_equals_thumbnail_network_at_its_windows(stride):
+    # trunk(stride=s): the first log2(s) pools keep their stride 2, so the maps hold only the windows
+    # whose top-left corner is a multiple of s (a window at an even position pools the same 2 x 2
+    # blocks as the whole image's stride-2 pool), at map position (i / s, j / s); each must still be
+    # the thumbnail network's output on that window alone (compact has two pools: s up to 4).
+    gen = torch.Generator().manual_seed(5)
+    net = build_model("compact", gen).eval()
+    stream = DenseGQCNN(net).streams[0]
+    assert stream.max_stride == 4
+    images = torch.randn(2, 1, 45, 50, generator=gen)
+    rows, cols = range(0, 45 - IMAGE_SIZE + 1, stride), range(0, 50 - IMAGE_SIZE + 1, stride)
+    batch, r, c = (t.reshape(-1) for t in torch.meshgrid(torch.arange(2), torch.tensor(rows), torch.tensor(cols),
+                                                          indexing="ij"))
+    with torch.no_grad():
+        got = stream.features(stream.trunk(images, stride), batch, r // stride, c // stride, stride)
+        windows = torch.stack([images[b, :, i:i + IMAGE_SIZE, j:j + IMAGE_SIZE]
+                               for b, i, j in zip(batch.tolist(), r.tolist(), c.tolist(), strict=True)])
+        want = net.image_stream(windows)
+    assert got.shape == want.shape == (2 * len(rows) * len(cols), net.image_stream[-2].out_features)
+    torch.testing.assert_close(got, want, rtol=1e-5, atol=1e-5)
+    with pytest.raises(ValueError, match="stride 8 is not a power of 2 up to 4"):
+        stream.trunk(images, 8)
+
+
 def test_dense_context_net_equals_two_stream_network():
     # A context net's two streams each run densely over their own image (the context lattice is
     # coarser, so its maps have another size) and each position reads its own window in each; the

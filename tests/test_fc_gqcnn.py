@@ -44,10 +44,10 @@ def _window_centre(points: np.ndarray, a0: int, b0: int, angle: float, pitch: fl
                                             + np.array([math.sin(angle), -math.cos(angle)]))
 
 
-def _dense_windows(model, configs, count: int, seed: int):
+def _dense_windows(model, configs, count: int, seed: int, strides=None):
     """fc-gqcnn's dense map (refine 0) on box_tea; `count` random pixels of it, their bins' angles
     and, per thumbnail config, the image centre of each pixel's lattice window (read independently
-    through `_window_centre`)."""
+    through `_window_centre`; windows `strides` lattice steps apart, 1 each by default)."""
     policy = make_policy("fc-gqcnn", model=model, refine=0)
     scene = Scene("basic/box_tea")
     observation = scene.observation(mask=scene.mask)
@@ -60,8 +60,9 @@ def _dense_windows(model, configs, count: int, seed: int):
     centres = [[] for _ in configs]
     for i in pick:
         mine = np.flatnonzero(bins == bins[i])
-        for config, found in zip(configs, centres, strict=True):
-            points, windows = lattice_positions(dense["pixels"][mine], bins[i] * step, config)
+        for config, stride, found in zip(configs, strides or [1] * len(configs), centres, strict=True):
+            points, windows = lattice_positions(dense["pixels"][mine], bins[i] * step, config, stride)
+            assert not (windows % stride).any()
             a0, b0 = windows[np.searchsorted(mine, i)]
             found.append(_window_centre(points, a0, b0, bins[i] * step, pitch=1 / config.scale))
     return policy, observation, dense, pick, bins[pick] * step, [np.array(c) for c in centres]
@@ -86,14 +87,16 @@ def test_dense_q_is_the_network_on_each_pixels_window():
     assert action.q == pytest.approx(float(dense["q"].max()))
 
 
-@pytest.mark.parametrize("change", [{"sampling": "point"}, {"sampling": "mean"}, {"crop_size": 64}],
-                         ids=["point", "mean", "crop-64"])
+@pytest.mark.parametrize("change", [{"sampling": "point"}, {"sampling": "mean"}, {"crop_size": 64},
+                                    {"crop_size": 48}], ids=["point", "mean", "crop-64", "crop-48"])
 def test_dense_q_of_a_context_net_reads_both_lattices(change):
     # A two-stream (context) net: each pixel's dense q is the network's on the pair (grasp thumbnail
     # centred on its 3-px-lattice window, 2 px for a 64 px crop, context thumbnail centred on its
     # 9-px-lattice window of the box-filtered image), both at the bin's angle, with the pixel's own
     # pose; the grasp lattice reads the image as the model's dataset did (point samples, 3 x 3
-    # block means, or a 64 px crop).
+    # block means, or a 64 px crop). A 48 px crop's lattice has a 1.5 px pitch, finer than the
+    # policy's 3 px window pitch: every second window along each axis is scored (stride 2, windows
+    # 3 px apart), so a pixel's window centre is at most 3 sqrt(2) / 2 px from it.
     from suctionbench.config import to_dict
     from suctionbench.learning.checkpoint import GQCNNModel
     from suctionbench.learning.data import NormStats
@@ -104,10 +107,13 @@ def test_dense_q_of_a_context_net_reads_both_lattices(change):
     thumbnail = dataclasses.replace(THUMBNAIL_GQCNN, **change)
     model = GQCNNModel(build_model("context", torch.Generator().manual_seed(2)), stats,
                        {"arch": "context", "dataset": {"thumbnail": to_dict(thumbnail)}})
+    stride = 2 if thumbnail.crop_size == 48 else 1
     _, observation, dense, pick, turn, (grasp, context) = _dense_windows(
-        model, [thumbnail, THUMBNAIL_CONTEXT], 40, 1)
+        model, [thumbnail, THUMBNAIL_CONTEXT], 40, 1, [stride, 1])
     off = np.linalg.norm(context - dense["pixels"][pick], axis=1)
     assert off.max() <= 9 * math.sqrt(2) / 2 + 1e-9  # half the context lattice's diagonal
+    off = np.linalg.norm(grasp - dense["pixels"][pick], axis=1)
+    assert off.max() <= stride * thumbnail.crop_size / 32 * math.sqrt(2) / 2 + 1e-9  # half the windows' diagonal
     pairs = np.stack([sample_thumbnails(observation.depth, grasp, turn, thumbnail),
                       extract_context_thumbnails(observation.depth, context, turn)], axis=1)
     want = model.predict(pairs, dense["poses"][pick])

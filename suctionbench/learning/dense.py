@@ -23,7 +23,10 @@ Cost. No pooling shrinks the maps, so every layer runs at the input's resolution
 costs 0.91 M: ~30x less per grasp, when all positions are wanted. Most positions of a scene are
 not wanted (off the object, or scored at another rotation of the image), so the pass splits in
 two: `trunk` (the convolutions, 5 k per position, over the whole image) and `head` (the fully
-connected layer, 26 k, gathered at the positions asked for, and the merge).
+connected layer, 26 k, gathered at the positions asked for, and the merge). Where windows every
+other position are enough (a fine thumbnail pitch), `trunk(stride=2)` keeps the first pool's stride
+and runs the layers after it on a quarter of the positions: for compact 400 + 4,608 / 4 ~ 1.6 k
+per input position.
 
 Context nets (two image streams). The context stream reads a thumbnail of the same layout cut
 from a 3x coarser, box-filtered image, so it gets its own dense trunk on its own lattice (the
@@ -70,29 +73,50 @@ class DenseStream(nn.Module):
         channels = next(m for m, _ in reversed(self.layers) if isinstance(m, nn.Conv2d)).out_channels
         self.fc_side = round((self.fc3.in_features / channels) ** 0.5)
 
-    def trunk(self, image: torch.Tensor) -> torch.Tensor:
+    @property
+    def max_stride(self) -> int:
+        """The coarsest window stride `trunk` can give: 2 to the number of the stream's pools."""
+        return self.fc_dilation
+
+    def trunk(self, image: torch.Tensor, stride: int = 1) -> torch.Tensor:
         """The stream's maps before its fully connected layer, (B, C, h, w), for a normalised image
-        (B, 1, H, W): the cheap part, shared by every position."""
-        x = image
+        (B, 1, H, W): the cheap part, shared by every position.
+
+        `stride` (a power of 2, at most `max_stride`): only the windows whose top-left pixel is a
+        multiple of it, the first log2(stride) pools keeping their stride 2 (a window at an even
+        position pools the same 2 x 2 blocks as the whole image's stride-2 pool), so every later
+        layer runs on stride^2 times fewer positions. Window (i, j) is then map position
+        (i / stride, j / stride)."""
+        if stride not in {2**k for k in range(self.max_stride.bit_length())}:
+            raise ValueError(f"dense GQ-CNN: stride {stride} is not a power of 2 up to {self.max_stride}")
+        x, done = image, 1  # done: the subsampling the strided pools have applied so far
         for module, dilation in self.layers:
+            step = dilation // done  # the layer's taps apart, in the subsampled maps
             if isinstance(module, nn.Conv2d):
-                x = F.conv2d(x, module.weight, module.bias, dilation=dilation)
-            elif isinstance(module, nn.MaxPool2d):  # 2 x 2, stride 1, taps `dilation` apart
+                x = F.conv2d(x, module.weight, module.bias, dilation=step)
+            elif isinstance(module, nn.MaxPool2d) and done < stride:  # max_pool2d(x, 2), as maxima of
+                # the four strided views (max_pool2d is several times slower on CPU)
+                x = x[..., :x.shape[-2] // 2 * 2, :x.shape[-1] // 2 * 2]
+                x = torch.maximum(torch.maximum(x[..., 0::2, 0::2], x[..., 0::2, 1::2]),
+                                  torch.maximum(x[..., 1::2, 0::2], x[..., 1::2, 1::2]))
+                done *= 2
+            elif isinstance(module, nn.MaxPool2d):  # 2 x 2, stride 1, taps `step` apart
                 # as two elementwise maxima of shifted views: several times faster on CPU than
                 # max_pool2d's dilated path, and the same values
-                x = torch.maximum(x[..., :, :-dilation], x[..., :, dilation:])
-                x = torch.maximum(x[..., :-dilation, :], x[..., dilation:, :])
+                x = torch.maximum(x[..., :, :-step], x[..., :, step:])
+                x = torch.maximum(x[..., :-step, :], x[..., step:, :])
             else:
                 x = module(x)
         return x
 
-    def features(self, maps: torch.Tensor, batch: torch.Tensor, rows: torch.Tensor, cols: torch.Tensor
-                 ) -> torch.Tensor:
+    def features(self, maps: torch.Tensor, batch: torch.Tensor, rows: torch.Tensor, cols: torch.Tensor,
+                 stride: int = 1) -> torch.Tensor:
         """The fully connected layer's output (P, F) at P windows (image `batch`, `rows`, `cols`;
-        (P,) long) of the trunk's `maps`: its s x s taps gathered where the dense form would read
-        them (the final dilation apart), in torch's (C, H, W) flatten order, so the layer's own
-        weights apply. Window (i, j) is the 32 x 32 window whose top-left pixel is (i, j)."""
-        taps = self.fc_dilation * torch.arange(self.fc_side, device=maps.device)
+        (P,) long) of the trunk's `maps` (computed with `stride`): its s x s taps gathered where the
+        dense form would read them (the final dilation apart), in torch's (C, H, W) flatten order,
+        so the layer's own weights apply. Window (i, j) is the 32 x 32 window whose top-left pixel
+        is (stride i, stride j)."""
+        taps = self.fc_dilation // stride * torch.arange(self.fc_side, device=maps.device)
         r = rows[:, None, None] + taps[None, :, None]
         c = cols[:, None, None] + taps[None, None, :]
         windows = maps[batch[:, None, None], :, r, c].permute(0, 3, 1, 2)  # (P, C, s, s)

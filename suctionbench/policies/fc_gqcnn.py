@@ -8,13 +8,16 @@ Algorithm (one `plan`)
    angle] and the image angle of its approach (`thumbnails.project_grasps`).
 2. The thumbnail network sees each grasp in a crop turned to that image angle. A dense pass needs
    one image per angle, so the angles are binned into `rotations` bins (16: at most 11.25 deg
-   from the exact turn) and, per bin, the depth image is resampled on a lattice of 3-pixel pitch
-   (the thumbnail's own sampling: bilinear point samples, `extract_thumbnails`) turned to the
-   bin's angle, covering that bin's pixels. Every 32 x 32 window of the lattice is then the
-   thumbnail of the grasp at its centre, and `learning.dense.DenseGQCNN` scores them all: its
-   trunk once over all bins' lattices, stacked into one batch of a common shape (`lattice_batch`:
-   one call per stream instead of 16 small ones), its head at the window nearest each pixel (at most 2.1 pixels off, the
-   half-diagonal of the 3-pixel pitch). About 9 neighbouring pixels share a window, so its fully
+   from the exact turn) and, per bin, the depth image is resampled on a lattice of the thumbnail's
+   pitch (3 pixels for gqcnn's 96-pixel crop; bilinear point samples, `extract_thumbnails`) turned
+   to the bin's angle, covering that bin's pixels. Every 32 x 32 window of the lattice is then the
+   thumbnail of the grasp at its centre, and `learning.dense.DenseGQCNN` scores them: its trunk
+   once over all bins' lattices, stacked into one batch of a common shape (`lattice_batch`: one
+   call per stream instead of 16 small ones), its head at the window nearest each pixel. Windows
+   are scored `window_pitch` (3) pixels apart at the finest: a finer thumbnail (a 48-pixel crop's
+   1.5-pixel pitch) scores every second window of its lattice (`lattice_stride`; the trunk's first
+   pool keeps its stride), so a pixel's window is at most 2.1 pixels off, the half-diagonal of
+   3 pixels, whatever the crop. About 9 neighbouring pixels share a window, so its fully
    connected features and their share of the merge's first layer are computed once per window;
    only the pose stream and the rest of the merge run per pixel (`DenseGQCNN.merge`).
 3. The quality map is q at every valid pixel (NaN elsewhere). The `refine` best pixels are scored
@@ -84,32 +87,54 @@ class DenseConfig:
     """The context thumbnail a two-stream (context) network was trained on: its own lattice, 3x
     coarser, sampled from the box-filtered image (`thumbnails.sampled_image`)."""
 
+    window_pitch: float = 3.0
+    """Image pixels between neighbouring windows of a lattice, at least: a stream whose thumbnail
+    pitch is finer scores only every `stride`-th window along each axis (`lattice_stride`), its
+    trunk that much cheaper (`DenseStream.trunk`); each pixel reads its nearest scored window, at
+    most half the diagonal of that pitch off, and `refine` rescores the best exactly. 3.0: the
+    96 px grasp thumbnail's own pitch, so a 48 px model's windows are as dense as a 96 px one's."""
+
     def __post_init__(self) -> None:
         if not (isinstance(self.rotations, int) and self.rotations >= 1):
             raise InputError(f"dense policy: rotations = {self.rotations!r} must be an integer >= 1")
         if not (isinstance(self.refine, int) and self.refine >= 0):
             raise InputError(f"dense policy: refine = {self.refine!r} must be an integer >= 0")
+        if not (isinstance(self.window_pitch, int | float) and math.isfinite(self.window_pitch)
+                and self.window_pitch > 0):
+            raise InputError(f"dense policy: window_pitch = {self.window_pitch!r} must be a number > 0 (pixels)")
 
 
-def lattice_positions(pixels: np.ndarray, angle: float, config: ThumbnailConfig = THUMBNAIL_GQCNN
-                      ) -> tuple[np.ndarray, np.ndarray]:
+def lattice_stride(config: ThumbnailConfig, window_pitch: float, max_stride: int) -> int:
+    """How many lattice steps apart a stream's scored windows lie: the largest power of 2 whose
+    multiple of the thumbnail's pitch (1 / config.scale image pixels) is at most `window_pitch`,
+    1 at least and `max_stride` at most (the stream's pools: `DenseStream.max_stride`)."""
+    stride = 1
+    while 2 * stride <= max_stride and 2 * stride / config.scale <= window_pitch + 1e-9:
+        stride *= 2
+    return stride
+
+
+def lattice_positions(pixels: np.ndarray, angle: float, config: ThumbnailConfig = THUMBNAIL_GQCNN,
+                      stride: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """For grasp pixels (N, 2) = (u, v) turned by image angle `angle`: the lattice's sample points
     (rows, cols, 2) = image (u, v), and each pixel's nearest window (N, 2) = (row, col) of its
     top-left corner. Lattice point (a, b) is o + p (b e + a d), p the thumbnail's pitch in image
     pixels (1 / config.scale) and d, e its row and column axes (`thumbnails.thumbnail_axes`), so
-    window (a0, b0) is the thumbnail centred on o + p ((b0 + c) e + (a0 + c) d), c = config.centre."""
-    points, windows = lattice_batch(pixels, np.zeros(len(pixels), dtype=np.intp), np.array([angle]), config)
+    window (a0, b0) is the thumbnail centred on o + p ((b0 + c) e + (a0 + c) d), c = config.centre;
+    with `stride`, the nearest window whose indices are multiples of it."""
+    points, windows = lattice_batch(pixels, np.zeros(len(pixels), dtype=np.intp), np.array([angle]), config,
+                                    stride)
     return points[0], windows
 
 
 def lattice_batch(pixels: np.ndarray, bins: np.ndarray, angles: np.ndarray,
-                  config: ThumbnailConfig = THUMBNAIL_GQCNN) -> tuple[np.ndarray, np.ndarray]:
+                  config: ThumbnailConfig = THUMBNAIL_GQCNN, stride: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """`lattice_positions` for several angles at once: pixel i is turned by angles[bins[i]] (every
     bin holds at least one pixel: `np.unique`'s inverse indices, as `quality` passes them). Every
     bin's lattice starts at its own pixels' corner and all share one shape (rows, cols), the largest
     any bin needs (a smaller bin's lattice runs on past its pixels), so they stack into one batch:
     sample points (B, rows, cols, 2) = image (u, v) and each pixel's window (N, 2) in its bin's
-    lattice."""
+    lattice: the nearest whose indices are multiples of `stride` (the trunk's, `lattice_stride`)."""
     d, e = thumbnail_axes(np.asarray(angles, dtype=float))  # (B, 2) each
     pitch, size = 1.0 / config.scale, config.out_size
     along = np.einsum("ij,ij->i", pixels, d[bins]) / pitch - config.centre
@@ -118,7 +143,8 @@ def lattice_batch(pixels: np.ndarray, bins: np.ndarray, angles: np.ndarray,
     np.minimum.at(a_min, bins, along)
     np.minimum.at(b_min, bins, across)
     a_min, b_min = np.floor(a_min), np.floor(b_min)
-    windows = np.column_stack([np.rint(along - a_min[bins]), np.rint(across - b_min[bins])]).astype(np.intp)
+    windows = stride * np.column_stack([np.rint((along - a_min[bins]) / stride),
+                                        np.rint((across - b_min[bins]) / stride)]).astype(np.intp)
     rows, cols = int(windows[:, 0].max()) + size, int(windows[:, 1].max()) + size
     a = (np.arange(rows)[None, :] + a_min[:, None])[:, :, None, None]  # (B, rows, 1, 1)
     b = (np.arange(cols)[None, :] + b_min[:, None])[:, None, :, None]  # (B, 1, cols, 1)
@@ -181,18 +207,21 @@ class FCGQCNNPolicy:
         with torch.no_grad():  # every bin's lattice in one batch: one resampling and one trunk pass per stream
             features, shared = [], []
             for stream, (thumbnail, image) in enumerate(views):
-                points_uv, at = lattice_batch(pixels, bin_of, kinds * step, thumbnail)
+                trunk = dense.streams[stream]
+                stride = lattice_stride(thumbnail, cfg.window_pitch, trunk.max_stride)
+                points_uv, at = lattice_batch(pixels, bin_of, kinds * step, thumbnail, stride)
                 lattice = ndimage.map_coordinates(image, [points_uv[..., 1], points_uv[..., 0]], order=1,
                                                   mode="nearest")
                 mean, std = model.stats.channel(stream)
                 lattice = ((lattice - mean) / std).astype(np.float32)
-                maps = dense.streams[stream].trunk(torch.from_numpy(lattice)[:, None])
+                maps = trunk.trunk(torch.from_numpy(lattice)[:, None], stride)
                 # ~(pitch)^2 neighbouring pixels share a window: its features are computed once
-                height, width = lattice.shape[1:]
+                at = at // stride  # the window's position in the strided maps
+                height, width = maps.shape[2:]
                 flat, share = np.unique((bin_of * height + at[:, 0]) * width + at[:, 1], return_inverse=True)
                 batch, rest = np.divmod(flat, height * width)
                 window = torch.from_numpy(np.stack([batch, *np.divmod(rest, width)]))
-                features.append(dense.streams[stream].features(maps, window[0], window[1], window[2]))
+                features.append(trunk.features(maps, window[0], window[1], window[2], stride))
                 shared.append(torch.from_numpy(share.reshape(-1)))
             logits = dense.merge(features, pose_in, shared)
             q = torch.softmax(logits, dim=1)[:, 1].double().numpy()

@@ -267,7 +267,9 @@ def _same_files(a, b) -> bool:
 
 def bench_plan(*, policies: list[str], model: str | None, scenes: int, seed: int, cores: int) -> dict[str, Any]:
     """Seconds per planned grasp of each image policy on rendered scenes of the typical set; for
-    gqcnn also the reference (the same CEM with one network call per candidate, unbatched)."""
+    gqcnn also the reference (the same CEM with one network call per candidate, unbatched), for
+    fc-gqcnn the same dense policy scoring every window of its lattices (`DenseConfig.window_pitch`
+    under the thumbnail's pitch)."""
     from suctionbench.objects.registry import list_objects
     from suctionbench.policies.base import MODEL_POLICIES, make_policy
     from suctionbench.sim.pick import PickRequest, PickRunner
@@ -301,7 +303,22 @@ def bench_plan(*, policies: list[str], model: str | None, scenes: int, seed: int
                 result["gqcnn_reference_unbatched_s_per_grasp"] / result["gqcnn_s_per_grasp"], 1
             )
             policy.model = scorer
+        if name == "fc-gqcnn":  # the reference: every window of the thumbnail's lattice (stride 1)
+            every = make_policy(name, window_pitch=_EVERY_WINDOW,
+                                **({"model": model} if model else {}))
+            every.plan(observations[0], np.random.default_rng(seed))
+            start = time.perf_counter()
+            for k, obs in enumerate(observations):
+                every.plan(obs, np.random.default_rng(seed + k))
+            result["fc-gqcnn_reference_every_window_s_per_grasp"] = round(
+                (time.perf_counter() - start) / len(observations), 4)
+            result["fc-gqcnn_window_pitch_speedup"] = round(
+                result["fc-gqcnn_reference_every_window_s_per_grasp"] / result["fc-gqcnn_s_per_grasp"], 2)
     return result
+
+
+_EVERY_WINDOW = 1e-3
+"""A dense window pitch (image pixels) under any thumbnail's pitch: every lattice window scored."""
 
 
 class _Unbatched:

@@ -196,3 +196,25 @@ def test_an_object_context_net_gets_each_grasps_context_from_both_policies():
     rows, cols = dense["pixels"][pick, 1].astype(int), dense["pixels"][pick, 0].astype(int)
     scored = cem.score(observation, cloud, rows, cols)
     np.testing.assert_allclose(scored["poses"], dense["poses"][pick], rtol=0, atol=1e-6)
+
+
+def test_window_pitch_sets_each_streams_stride():
+    # Windows at least `window_pitch` image pixels apart: the largest power of 2 of the thumbnail's
+    # pitch (crop / 32 px) not above it, capped by the stream's pools. 96 px crop: pitch 3 -> every
+    # window; 48 px: 1.5 -> every 2nd (3 px apart); 24 px: 0.75 -> every 4th (3 px), or every 2nd
+    # where the stream has only one pool (max stride 2); the 288 px context: 9 -> every window. The
+    # bench's reference pitch lies under any pitch: every window.
+    from suctionbench.bench import _EVERY_WINDOW
+    from suctionbench.errors import InputError
+    from suctionbench.policies.fc_gqcnn import DenseConfig, lattice_stride
+    from suctionbench.sensing.thumbnails import THUMBNAIL_CONTEXT
+
+    def crop(size):
+        return dataclasses.replace(THUMBNAIL_GQCNN, crop_size=size)
+
+    assert [lattice_stride(crop(c), 3.0, 4) for c in (96, 64, 48, 24)] == [1, 1, 2, 4]
+    assert lattice_stride(crop(24), 3.0, 2) == 2
+    assert lattice_stride(THUMBNAIL_CONTEXT, 3.0, 4) == 1
+    assert lattice_stride(crop(24), _EVERY_WINDOW, 4) == 1
+    with pytest.raises(InputError, match="window_pitch = 0 must be a number > 0"):
+        DenseConfig(window_pitch=0)

@@ -150,7 +150,8 @@ def bench_plan_cmd(
     seed: SeedOpt = 0,
     as_json: JsonOpt = False,
 ) -> None:
-    """Seconds per planned grasp for each policy (gqcnn also against unbatched network calls)."""
+    """Seconds per planned grasp for each policy (gqcnn also against unbatched network calls,
+    fc-gqcnn against scoring every window of its lattices)."""
 
     def body() -> dict[str, Any]:
         from suctionbench.bench import bench_plan

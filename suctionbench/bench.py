@@ -287,11 +287,7 @@ def bench_plan(*, policies: list[str], model: str | None, scenes: int, seed: int
     result: dict[str, Any] = {"scenes": len(observations), "cores": used_cores}
     for name in policies:
         policy = make_policy(name, **({"model": model} if name in MODEL_POLICIES and model else {}))
-        policy.plan(observations[0], np.random.default_rng(seed))  # warm-up (model load, caches)
-        start = time.perf_counter()
-        for k, obs in enumerate(observations):
-            policy.plan(obs, np.random.default_rng(seed + k))
-        result[f"{name}_s_per_grasp"] = round((time.perf_counter() - start) / len(observations), 4)
+        result[f"{name}_s_per_grasp"] = _seconds_per_grasp(policy, observations, seed)
         if name == "gqcnn":
             scorer = policy.model
             unbatched = _Unbatched(scorer)
@@ -304,17 +300,20 @@ def bench_plan(*, policies: list[str], model: str | None, scenes: int, seed: int
             )
             policy.model = scorer
         if name == "fc-gqcnn":  # the reference: every window of the thumbnail's lattice (stride 1)
-            every = make_policy(name, window_pitch=_EVERY_WINDOW,
-                                **({"model": model} if model else {}))
-            every.plan(observations[0], np.random.default_rng(seed))
-            start = time.perf_counter()
-            for k, obs in enumerate(observations):
-                every.plan(obs, np.random.default_rng(seed + k))
-            result["fc-gqcnn_reference_every_window_s_per_grasp"] = round(
-                (time.perf_counter() - start) / len(observations), 4)
+            every = make_policy(name, window_pitch=_EVERY_WINDOW, **({"model": model} if model else {}))
+            result["fc-gqcnn_reference_every_window_s_per_grasp"] = _seconds_per_grasp(every, observations, seed)
             result["fc-gqcnn_window_pitch_speedup"] = round(
                 result["fc-gqcnn_reference_every_window_s_per_grasp"] / result["fc-gqcnn_s_per_grasp"], 2)
     return result
+
+
+def _seconds_per_grasp(policy: Any, observations: list, seed: int) -> float:
+    """Mean seconds of `policy.plan` over the observations, after one untimed plan (model load, caches)."""
+    policy.plan(observations[0], np.random.default_rng(seed))
+    start = time.perf_counter()
+    for k, obs in enumerate(observations):
+        policy.plan(obs, np.random.default_rng(seed + k))
+    return round((time.perf_counter() - start) / len(observations), 4)
 
 
 _EVERY_WINDOW = 1e-3

@@ -36,6 +36,7 @@ from suctionbench.learning.models import (
     LRN_BETA,
     LRN_BIAS,
     LRN_RADIUS,
+    MaxPool2x2,
     build_model,
     count_macs,
     count_parameters,
@@ -232,6 +233,21 @@ def test_lrn_matches_tensorflow_formula():
         want[:, c] = x.numpy()[:, c] / (LRN_BIAS + LRN_ALPHA_TF * window) ** LRN_BETA
     np.testing.assert_allclose(got.numpy(), want, rtol=1e-5)
     assert not np.allclose(want, x.numpy(), rtol=1e-3)
+
+
+@pytest.mark.parametrize("shape", [(3, 4, 28, 28), (2, 3, 9, 11)])  # even, and odd (last row/column dropped)
+def test_fast_pool_is_max_pool2d_and_trains_through_it(shape):
+    # Without autograd the four strided views' maxima are max_pool2d's values exactly (max is
+    # exact); with autograd the pool is max_pool2d, so training's gradients are unchanged.
+    x = torch.randn(*shape, generator=torch.Generator().manual_seed(1))
+    x[0, 0, :4, :4] = 0.0  # ties, as after a ReLU
+    pool = MaxPool2x2()
+    with torch.no_grad():
+        assert torch.equal(pool(x), torch.nn.functional.max_pool2d(x, 2))
+    a, b = x.clone().requires_grad_(), x.clone().requires_grad_()
+    (pool(a) * torch.arange(pool(a).numel()).reshape(pool(a).shape)).sum().backward()
+    (torch.nn.functional.max_pool2d(b, 2) * torch.arange(pool(a).numel()).reshape(pool(a).shape)).sum().backward()
+    assert torch.equal(a.grad, b.grad)
 
 
 def test_unknown_arch_is_input_error():

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 import torch
-from scipy import stats
+from scipy import ndimage, stats
 
 from suctionbench.errors import InputError
 from suctionbench.sensing.camera import PRIMESENSE
@@ -27,6 +27,7 @@ from suctionbench.sensing.thumbnails import (
     THUMBNAIL_CONTEXT,
     THUMBNAIL_GQCNN,
     ThumbnailConfig,
+    bilinear_sample,
     extract_context_thumbnails,
     extract_thumbnails,
     extract_thumbnails_reference,
@@ -247,6 +248,21 @@ def test_turning_the_approach_turns_the_thumbnail():
     assert thumbs[0].std() > 1e-3  # the pattern is not symmetric
     np.testing.assert_allclose(thumbs[1], np.rot90(thumbs[0], 1), atol=1e-6)  # content turns anticlockwise
     np.testing.assert_allclose(thumbs[2], np.rot90(thumbs[0], 2), atol=1e-6)
+
+
+def test_bilinear_sample_is_scipys_order_1_nearest_interpolation():
+    # Bilinear interpolation with the edge pixels repeated outside (scipy's map_coordinates, order 1,
+    # mode "nearest") at points inside, on the border, on pixel centres and well outside the image;
+    # both compute in float64 and round once to float32, so they agree to a float32 ulp.
+    rng = np.random.default_rng(11)
+    image = (0.6 + 0.1 * rng.random((37, 53))).astype(np.float32)
+    rows = np.concatenate([rng.uniform(-6, 42, 500), [0.0, 36.0, 36.0, -1.0, 17.0]])
+    cols = np.concatenate([rng.uniform(-6, 58, 500), [0.0, 52.0, -3.0, 60.0, 23.0]])
+    want = ndimage.map_coordinates(image, [rows, cols], order=1, mode="nearest")
+    got = bilinear_sample(image, rows.reshape(5, 101), cols.reshape(5, 101))
+    assert got.dtype == np.float32 and got.shape == (5, 101)
+    np.testing.assert_allclose(got.ravel(), want, rtol=2e-7, atol=0)
+    assert got.ravel()[-1] == image[17, 23]  # a pixel centre is the pixel
 
 
 def test_vectorised_extraction_matches_per_grasp_reference():

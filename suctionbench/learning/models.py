@@ -126,6 +126,29 @@ def tf_lrn_to_torch(radius: int, alpha: float, beta: float, bias: float) -> nn.L
     return nn.LocalResponseNorm(size, alpha=alpha * size, beta=beta, k=bias)
 
 
+def max_pool_2x2(x: torch.Tensor) -> torch.Tensor:
+    """``F.max_pool2d(x, 2)`` (2 x 2, stride 2, an odd last row or column dropped) as the elementwise
+    maxima of the four strided views: the same values, ~7x faster on CPU (1.2 against 9.2 ms on
+    200 x 16 x 28 x 28, 2 threads)."""
+    x = x[..., : x.shape[-2] // 2 * 2, : x.shape[-1] // 2 * 2]
+    return torch.maximum(torch.maximum(x[..., 0::2, 0::2], x[..., 0::2, 1::2]),
+                         torch.maximum(x[..., 1::2, 0::2], x[..., 1::2, 1::2]))
+
+
+class MaxPool2x2(nn.MaxPool2d):
+    """``nn.MaxPool2d(2)`` whose forward pass without autograd (planning, evaluation) is
+    `max_pool_2x2`; with autograd it is max_pool2d itself, whose gradient (all of it to the first
+    maximum of a tie) the shipped models were trained with."""
+
+    def __init__(self) -> None:
+        super().__init__(2)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        if torch.is_grad_enabled() and x.requires_grad:
+            return super().forward(x)
+        return max_pool_2x2(x)
+
+
 class _ConvBlock(nn.Sequential):
     """conv -> ReLU [-> LRN] [-> 2x2 max-pool], gqcnn's order within a conv layer."""
 
@@ -134,7 +157,7 @@ class _ConvBlock(nn.Sequential):
         if lrn:
             layers.append(tf_lrn_to_torch(LRN_RADIUS, LRN_ALPHA_TF, LRN_BETA, LRN_BIAS))
         if pool:
-            layers.append(nn.MaxPool2d(2))
+            layers.append(MaxPool2x2())
         super().__init__(*layers)
 
 

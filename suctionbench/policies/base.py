@@ -42,6 +42,7 @@ Geometry read from the image (`SceneCloud`)
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -336,22 +337,28 @@ def surface_normals(points: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, 
 
 @dataclass
 class SceneCloud:
-    """Geometry of one observation that policies read (see the module docstring)."""
+    """Geometry of one observation that policies read (see the module docstring).
+
+    Everything that needs a normal lies in `box`, the object's bounding box plus the smoothing
+    margin, so the cloud is computed there (`box_*`); the whole-image arrays (`points`,
+    `smooth_points`, `approaches`) are built on first use, which the image policies never need
+    (they read `grasps_at` and `object_points`): 3 x 7 MB less to write per plan at 640 x 480."""
 
     depth: np.ndarray
     """Raw depth image (H, W) float64, metres."""
 
-    points: np.ndarray
-    """Raw depth image deprojected (H, W, 3), camera frame; the origin where depth is 0."""
+    box: tuple[slice, slice]
+    """(rows, columns) of the object's bounding box plus the smoothing margin, inside the image."""
 
-    smooth_points: np.ndarray
-    """Smoothed depth image deprojected (H, W, 3) in the object's bounding box plus the smoothing
-    margin, the raw points elsewhere (table only, far from any object pixel)."""
+    box_points: np.ndarray
+    """Raw depth image deprojected in `box` (h, w, 3), camera frame; the origin where depth is 0."""
 
-    approaches: np.ndarray
-    """Minus the smoothed-image normals (H, W, 3), unit (smoothed by `normal_sigma`); zero where
-    there is no normal and away from the object (normals are computed in the object's bounding box
-    plus the smoothing margin)."""
+    box_smooth_points: np.ndarray
+    """Smoothed depth image deprojected in `box` (h, w, 3)."""
+
+    box_approaches: np.ndarray
+    """Minus the smoothed-image normals in `box` (h, w, 3), unit (smoothed by `normal_sigma`); zero
+    where there is no normal."""
 
     object_mask: np.ndarray
     """Object pixels (H, W) bool with valid depth."""
@@ -368,10 +375,30 @@ class SceneCloud:
     relaxed: bool
     """True when no object pixel passed the angle limits and `valid` is every object pixel with a normal."""
 
+    @functools.cached_property
+    def points(self) -> np.ndarray:
+        """Raw depth image deprojected (H, W, 3), camera frame; the origin where depth is 0."""
+        return self.intrinsics.deproject(self.depth)
+
+    @functools.cached_property
+    def smooth_points(self) -> np.ndarray:
+        """`box_smooth_points` in the box, the raw points elsewhere (table only, far from any
+        object pixel), (H, W, 3)."""
+        points = self.points.copy()
+        points[self.box] = self.box_smooth_points
+        return points
+
+    @functools.cached_property
+    def approaches(self) -> np.ndarray:
+        """`box_approaches` in the box, zero elsewhere (no normal away from the object), (H, W, 3)."""
+        approaches = np.zeros((*self.depth.shape, 3))
+        approaches[self.box] = self.box_approaches
+        return approaches
+
     @property
     def object_points(self) -> np.ndarray:
-        """Points (M, 3) of the object pixels, camera frame."""
-        return self.points[self.object_mask]
+        """Points (M, 3) of the object pixels, camera frame, in row-major order."""
+        return self.box_points[self.object_mask[self.box]]
 
     @property
     def valid_pixels(self) -> np.ndarray:
@@ -382,7 +409,11 @@ class SceneCloud:
         """Pixels (N, 2) = (u, v) float, points (N, 3) and approaches (N, 3) of grasps at pixels."""
         rows, cols = np.asarray(rows, dtype=np.intp), np.asarray(cols, dtype=np.intp)
         pixels = np.column_stack([cols, rows]).astype(float)
-        return pixels, self.points[rows, cols], self.approaches[rows, cols]
+        r, c = rows - self.box[0].start, cols - self.box[1].start
+        height, width = self.box_points.shape[:2]
+        if ((r < 0) | (r >= height) | (c < 0) | (c >= width)).any():  # not a grasp pixel: the whole image
+            return pixels, self.points[rows, cols], self.approaches[rows, cols]
+        return pixels, self.box_points[r, c], self.box_approaches[r, c]
 
     def sample(self, count: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
         """(rows, cols) of up to `count` distinct valid pixels drawn uniformly (all of them, in
@@ -392,12 +423,13 @@ class SceneCloud:
         return pixels[pick, 0], pixels[pick, 1]
 
 
-def segment_object(observation: Observation, points: np.ndarray, config: SamplerConfig) -> np.ndarray:
+def segment_object(observation: Observation, config: SamplerConfig) -> np.ndarray:
     """Object pixels (H, W) bool: the observation's mask, or points above the table plane (world frame)."""
     has_depth = observation.depth > 0
     if observation.mask is not None:
         return observation.mask & has_depth
     pose = observation.camera_pose
+    points = observation.intrinsics.deproject(observation.depth)
     height = points @ pose[2, :3] + pose[2, 3]  # world z of every pixel's point
     return has_depth & (height > config.table_height + config.table_clearance)
 
@@ -416,45 +448,35 @@ def scene_cloud(observation: Observation, config: SamplerConfig) -> SceneCloud:
     intrinsics = observation.intrinsics
     depth = observation.depth.astype(float)
     has_depth = depth > 0
-    points = intrinsics.deproject(depth)
-    object_mask = segment_object(observation, points, config)
+    object_mask = segment_object(observation, config)
     if not object_mask.any():
         raise NoGraspError("no object pixel in the observation (empty mask or nothing above the table)")
     normal_sigma = normal_sigma_pixels(config, intrinsics, depth[object_mask])
     # Normals only around the object: a margin of the smoothing radius (4 sigma, scipy's truncation)
     # plus the gradient's neighbour leaves every object pixel's normal as on the whole image.
     margin = math.ceil(4.0 * max(config.depth_sigma, normal_sigma)) + 2
-    occupied = np.argwhere(object_mask)
-    (r0, c0) = np.maximum(occupied.min(axis=0) - margin, 0)
-    (r1, c1) = np.minimum(occupied.max(axis=0) + margin, np.array(depth.shape) - 1)  # inside the image
-    roi = (slice(r0, r1 + 1), slice(c0, c1 + 1))
-    v, u = np.mgrid[roi]
-
-    def deproject(smooth: np.ndarray) -> np.ndarray:
-        return np.stack([(u - intrinsics.cx) * smooth / intrinsics.fx,
-                         (v - intrinsics.cy) * smooth / intrinsics.fy, smooth], axis=-1)
-
-    smooth_points = deproject(smooth_depth(depth[roi], config.depth_sigma))
+    rows, cols = np.nonzero(object_mask.any(axis=1))[0], np.nonzero(object_mask.any(axis=0))[0]
+    r0, c0 = max(rows[0] - margin, 0), max(cols[0] - margin, 0)
+    r1, c1 = min(rows[-1] + margin, depth.shape[0] - 1), min(cols[-1] + margin, depth.shape[1] - 1)
+    box = (slice(r0, r1 + 1), slice(c0, c1 + 1))
+    smooth_points = intrinsics.deproject(smooth_depth(depth[box], config.depth_sigma), corner=(r0, c0))
     normal_points = (smooth_points if normal_sigma == config.depth_sigma
-                     else deproject(smooth_depth(depth[roi], normal_sigma)))
-    approaches = np.zeros_like(points)
-    has_normal = np.zeros_like(has_depth)
-    normals, has_normal[roi] = surface_normals(normal_points, has_depth[roi])
-    approaches[roi] = -normals
-    smoothed = points.copy()
-    smoothed[roi] = smooth_points
+                     else intrinsics.deproject(smooth_depth(depth[box], normal_sigma), corner=(r0, c0)))
+    normals, has_normal = surface_normals(normal_points, has_depth[box])
     table_normal = observation.camera_pose[:3, :3].T @ np.array([0.0, 0.0, 1.0])
-    candidates = object_mask & has_normal
+    candidates = object_mask[box] & has_normal
     if not candidates.any():
         raise NoGraspError("no object pixel has a surface normal (object too small or no depth around it)")
+    approaches = -normals
     along_axis = approaches[..., 2] >= math.cos(config.max_optical_axis_angle)
     downward = -(approaches @ table_normal) >= math.cos(config.max_approach_angle)
-    valid = candidates & along_axis & downward
-    relaxed = not valid.any()
+    relaxed = not (candidates & along_axis & downward).any()
+    valid = np.zeros_like(has_depth)
+    valid[box] = candidates if relaxed else candidates & along_axis & downward
     return SceneCloud(
-        depth=depth, points=points, smooth_points=smoothed, approaches=approaches, object_mask=object_mask,
-        valid=candidates if relaxed else valid, table_normal=table_normal, intrinsics=intrinsics,
-        relaxed=relaxed,
+        depth=depth, box=box, box_points=intrinsics.deproject(depth[box], corner=(r0, c0)),
+        box_smooth_points=smooth_points, box_approaches=approaches, object_mask=object_mask, valid=valid,
+        table_normal=table_normal, intrinsics=intrinsics, relaxed=relaxed,
     )
 
 

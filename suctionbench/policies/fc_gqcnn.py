@@ -43,7 +43,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
 
 from suctionbench.errors import InputError
 from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, configured, scene_cloud
@@ -61,6 +60,7 @@ from suctionbench.sensing.thumbnails import (
     THUMBNAIL_CONTEXT,
     THUMBNAIL_GQCNN,
     ThumbnailConfig,
+    bilinear_sample,
     project_grasps,
     thumbnail_axes,
 )
@@ -210,8 +210,7 @@ class FCGQCNNPolicy:
                 trunk = dense.streams[stream]
                 stride = lattice_stride(thumbnail, cfg.window_pitch, trunk.max_stride)
                 points_uv, at = lattice_batch(pixels, bin_of, kinds * step, thumbnail, stride)
-                lattice = ndimage.map_coordinates(image, [points_uv[..., 1], points_uv[..., 0]], order=1,
-                                                  mode="nearest")
+                lattice = bilinear_sample(image, points_uv[..., 1], points_uv[..., 0])
                 mean, std = model.stats.channel(stream)
                 lattice = ((lattice - mean) / std).astype(np.float32)
                 maps = trunk.trunk(torch.from_numpy(lattice)[:, None], stride)

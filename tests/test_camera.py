@@ -84,6 +84,8 @@ def test_project_and_deproject_are_inverse():
     np.testing.assert_allclose(uv, np.stack([u.ravel(), v.ravel()], axis=1), atol=1e-9)
     assert np.all(np.isnan(cam.project(np.array([[0.1, 0.2, 0.0], [0.1, 0.2, -1.0]]))))
     np.testing.assert_array_equal(cam.deproject(np.zeros((48, 64))), 0.0)
+    # a window of the image, given its corner, deprojects to the same points
+    np.testing.assert_array_equal(cam.deproject(depth[7:20, 30:61], corner=(7, 30)), points[7:20, 30:61])
 
 
 def test_scaled_keeps_rays_on_the_same_image_position():

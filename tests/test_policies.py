@@ -154,6 +154,28 @@ def test_segmentation_without_mask_matches_the_object(scenes):
         assert not (cloud.valid & ~cloud.object_mask).any()
 
 
+def test_cloud_in_the_object_box_is_the_whole_images_cloud(scenes):
+    # The cloud is computed in the object's box; the whole-image arrays built from it on first use
+    # must be what deprojecting and reading normals on the whole image gives: raw points everywhere,
+    # the box's smoothed points and normals inside it, and every grasp pixel (and object pixel) in it.
+    scene = scenes["basic/box_tea"]
+    cloud = scene_cloud(scene.observation(), SamplerConfig())
+    whole = PRIMESENSE.deproject(scene.depth)
+    np.testing.assert_array_equal(cloud.points, whole)
+    np.testing.assert_array_equal(cloud.points[cloud.box], cloud.box_points)
+    np.testing.assert_array_equal(cloud.object_points, whole[cloud.object_mask])
+    outside = np.ones(scene.depth.shape, bool)
+    outside[cloud.box] = False
+    assert not (outside & (cloud.valid | cloud.object_mask)).any()
+    assert not cloud.approaches[outside].any() and np.array_equal(cloud.smooth_points[outside], whole[outside])
+    rows, cols = np.nonzero(cloud.valid)
+    rows, cols = np.append(rows[:50], 0), np.append(cols[:50], 0)  # and a table pixel outside the box
+    pixels, points, approaches = cloud.grasps_at(rows, cols)
+    np.testing.assert_array_equal(points, whole[rows, cols])
+    np.testing.assert_array_equal(approaches, cloud.approaches[rows, cols])
+    assert np.allclose(np.linalg.norm(approaches[:-1], axis=1), 1.0) and not approaches[-1].any()
+
+
 def test_object_cut_by_the_image_border(scenes):
     # An object running off the bottom-right of the image (cropping there keeps cx, cy): the
     # normals' window around the object must stay inside the image (regression: a window past the

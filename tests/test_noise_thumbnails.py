@@ -27,6 +27,7 @@ from suctionbench.sensing.thumbnails import (
     THUMBNAIL_CONTEXT,
     THUMBNAIL_GQCNN,
     ThumbnailConfig,
+    affine_sample,
     bilinear_sample,
     extract_context_thumbnails,
     extract_thumbnails,
@@ -263,6 +264,24 @@ def test_bilinear_sample_is_scipys_order_1_nearest_interpolation():
     assert got.dtype == np.float32 and got.shape == (5, 101)
     np.testing.assert_allclose(got.ravel(), want, rtol=2e-7, atol=0)
     assert got.ravel()[-1] == image[17, 23]  # a pixel centre is the pixel
+
+
+def test_affine_lattices_sample_as_their_points_do():
+    # Lattice k's sample (a, b) at origin_k + a down_k + b right_k: the same value bilinear_sample
+    # gives at that point, for turned lattices inside the image and one running off two edges.
+    rng = np.random.default_rng(12)
+    image = (0.6 + 0.1 * rng.random((60, 80))).astype(np.float32)
+    turn = np.append(rng.uniform(-math.pi, math.pi, 2), math.pi / 2 + 0.3)  # the last one runs down the image
+    down = 1.5 * np.column_stack([np.cos(turn), np.sin(turn)])
+    right = 1.5 * np.column_stack([np.sin(turn), -np.cos(turn)])
+    origin = np.array([[30.2, 20.7], [41.0, 33.3], [-4.4, 55.1]])
+    got = affine_sample(image, origin, down, right, (9, 13))
+    a, b = np.mgrid[:9, :13]
+    points = origin[:, None, None] + a[..., None] * down[:, None, None] + b[..., None] * right[:, None, None]
+    assert (points < 0).any() and (points[..., 1] > 59).any()  # past the left and bottom edges
+    want = bilinear_sample(image, points[..., 1], points[..., 0])
+    assert got.shape == (3, 9, 13) and got.dtype == np.float32
+    np.testing.assert_allclose(got, want, rtol=2e-7, atol=0)
 
 
 def test_vectorised_extraction_matches_per_grasp_reference():

@@ -57,7 +57,8 @@ class DenseStream(nn.Module):
         super().__init__()
         self.stream = stream
         self.layers: list[tuple[nn.Module, int]] = []
-        """(module, dilation) of the stream's conv blocks, in order (conv, ReLU, LRN, pool)."""
+        """(module, dilation) of the stream's conv blocks, in order (conv, ReLU, LRN, pool; a pool
+        right after a ReLU runs before it)."""
         dilation = 1
         for block in stream:
             if isinstance(block, nn.Sequential):  # a conv block: conv -> ReLU [-> LRN] [-> pool]
@@ -70,6 +71,10 @@ class DenseStream(nn.Module):
                 self.fc3, self.fc_dilation = block, dilation
             elif not isinstance(block, nn.Flatten | nn.ReLU):
                 raise InputError(f"dense GQ-CNN: image stream layer {block!r} has no dense form")
+        for i in range(len(self.layers) - 1):  # ReLU then pool -> pool then ReLU: max commutes with
+            # the monotone ReLU, so the values are the same and the ReLU runs on the pooled map
+            if isinstance(self.layers[i][0], nn.ReLU) and isinstance(self.layers[i + 1][0], nn.MaxPool2d):
+                self.layers[i], self.layers[i + 1] = self.layers[i + 1], self.layers[i]
         channels = next(m for m, _ in reversed(self.layers) if isinstance(m, nn.Conv2d)).out_channels
         self.fc_side = round((self.fc3.in_features / channels) ** 0.5)
 
@@ -102,6 +107,8 @@ class DenseStream(nn.Module):
                 # max_pool2d's dilated path, and the same values
                 x = torch.maximum(x[..., :, :-step], x[..., :, step:])
                 x = torch.maximum(x[..., :-step, :], x[..., step:, :])
+            elif isinstance(module, nn.ReLU):
+                x = torch.relu_(x)  # in place: x is this pass's own fresh map
             else:
                 x = module(x)
         return x

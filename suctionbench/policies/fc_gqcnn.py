@@ -60,7 +60,7 @@ from suctionbench.sensing.thumbnails import (
     THUMBNAIL_CONTEXT,
     THUMBNAIL_GQCNN,
     ThumbnailConfig,
-    bilinear_sample,
+    affine_sample,
     project_grasps,
     thumbnail_axes,
 )
@@ -114,6 +114,37 @@ def lattice_stride(config: ThumbnailConfig, window_pitch: float, max_stride: int
     return stride
 
 
+@dataclass(frozen=True)
+class Lattices:
+    """Every bin's lattice and each pixel's window in it (`lattice_batch`): sample (a, b) of bin k's
+    lattice lies at image (u, v) = origin[k] + a down[k] + b right[k]."""
+
+    origin: np.ndarray
+    """(B, 2) image (u, v) of each lattice's sample (0, 0)."""
+
+    down: np.ndarray
+    """(B, 2) image step from one lattice row to the next: the thumbnail's pitch along its row axis d."""
+
+    right: np.ndarray
+    """(B, 2) image step from one lattice column to the next: the pitch along its column axis e."""
+
+    shape: tuple[int, int]
+    """(rows, cols) of every lattice."""
+
+    windows: np.ndarray
+    """(N, 2) = (row, col) of each pixel's window (its top-left sample) in its bin's lattice."""
+
+    def points(self) -> np.ndarray:
+        """The sample points (B, rows, cols, 2) = image (u, v)."""
+        a = np.arange(self.shape[0])[None, :, None, None]
+        b = np.arange(self.shape[1])[None, None, :, None]
+        return self.origin[:, None, None] + a * self.down[:, None, None] + b * self.right[:, None, None]
+
+    def sample(self, image: np.ndarray) -> np.ndarray:
+        """The lattices' bilinear samples (B, rows, cols) float32 of `image` (`affine_sample`)."""
+        return affine_sample(image, self.origin, self.down, self.right, self.shape)
+
+
 def lattice_positions(pixels: np.ndarray, angle: float, config: ThumbnailConfig = THUMBNAIL_GQCNN,
                       stride: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """For grasp pixels (N, 2) = (u, v) turned by image angle `angle`: the lattice's sample points
@@ -122,19 +153,18 @@ def lattice_positions(pixels: np.ndarray, angle: float, config: ThumbnailConfig 
     pixels (1 / config.scale) and d, e its row and column axes (`thumbnails.thumbnail_axes`), so
     window (a0, b0) is the thumbnail centred on o + p ((b0 + c) e + (a0 + c) d), c = config.centre;
     with `stride`, the nearest window whose indices are multiples of it."""
-    points, windows = lattice_batch(pixels, np.zeros(len(pixels), dtype=np.intp), np.array([angle]), config,
-                                    stride)
-    return points[0], windows
+    lattices = lattice_batch(pixels, np.zeros(len(pixels), dtype=np.intp), np.array([angle]), config, stride)
+    return lattices.points()[0], lattices.windows
 
 
 def lattice_batch(pixels: np.ndarray, bins: np.ndarray, angles: np.ndarray,
-                  config: ThumbnailConfig = THUMBNAIL_GQCNN, stride: int = 1) -> tuple[np.ndarray, np.ndarray]:
+                  config: ThumbnailConfig = THUMBNAIL_GQCNN, stride: int = 1) -> Lattices:
     """`lattice_positions` for several angles at once: pixel i is turned by angles[bins[i]] (every
     bin holds at least one pixel: `np.unique`'s inverse indices, as `quality` passes them). Every
     bin's lattice starts at its own pixels' corner and all share one shape (rows, cols), the largest
-    any bin needs (a smaller bin's lattice runs on past its pixels), so they stack into one batch:
-    sample points (B, rows, cols, 2) = image (u, v) and each pixel's window (N, 2) in its bin's
-    lattice: the nearest whose indices are multiples of `stride` (the trunk's, `lattice_stride`)."""
+    any bin needs (a smaller bin's lattice runs on past its pixels), so they stack into one batch;
+    each pixel's window in its bin's lattice is the nearest whose indices are multiples of `stride`
+    (the trunk's, `lattice_stride`)."""
     d, e = thumbnail_axes(np.asarray(angles, dtype=float))  # (B, 2) each
     pitch, size = 1.0 / config.scale, config.out_size
     along = np.einsum("ij,ij->i", pixels, d[bins]) / pitch - config.centre
@@ -145,10 +175,9 @@ def lattice_batch(pixels: np.ndarray, bins: np.ndarray, angles: np.ndarray,
     a_min, b_min = np.floor(a_min), np.floor(b_min)
     windows = stride * np.column_stack([np.rint((along - a_min[bins]) / stride),
                                         np.rint((across - b_min[bins]) / stride)]).astype(np.intp)
-    rows, cols = int(windows[:, 0].max()) + size, int(windows[:, 1].max()) + size
-    a = (np.arange(rows)[None, :] + a_min[:, None])[:, :, None, None]  # (B, rows, 1, 1)
-    b = (np.arange(cols)[None, :] + b_min[:, None])[:, None, :, None]  # (B, 1, cols, 1)
-    return pitch * (b * e[:, None, None, :] + a * d[:, None, None, :]), windows
+    shape = (int(windows[:, 0].max()) + size, int(windows[:, 1].max()) + size)
+    origin = pitch * (b_min[:, None] * e + a_min[:, None] * d)
+    return Lattices(origin=origin, down=pitch * d, right=pitch * e, shape=shape, windows=windows)
 
 
 class FCGQCNNPolicy:
@@ -209,8 +238,8 @@ class FCGQCNNPolicy:
             for stream, (thumbnail, image) in enumerate(views):
                 trunk = dense.streams[stream]
                 stride = lattice_stride(thumbnail, cfg.window_pitch, trunk.max_stride)
-                points_uv, at = lattice_batch(pixels, bin_of, kinds * step, thumbnail, stride)
-                lattice = bilinear_sample(image, points_uv[..., 1], points_uv[..., 0])
+                lattices = lattice_batch(pixels, bin_of, kinds * step, thumbnail, stride)
+                lattice, at = lattices.sample(image), lattices.windows
                 mean, std = model.stats.channel(stream)
                 lattice = ((lattice - mean) / std).astype(np.float32)
                 maps = trunk.trunk(torch.from_numpy(lattice)[:, None], stride)

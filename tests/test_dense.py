@@ -98,3 +98,20 @@ def test_same_padded_network_is_refused():
     # dn3's SAME padding reads zeros at a thumbnail's border where the whole image has neighbours.
     with pytest.raises(InputError, match="dense GQ-CNN: only VALID"):
         DenseGQCNN(build_model("dn3", torch.Generator().manual_seed(0)))
+
+
+@pytest.mark.parametrize("dilation", [1, 2])
+@pytest.mark.parametrize("size", [(23, 30), (24, 27)])
+def test_conv_then_pool_as_four_strided_convolutions(dilation, size):
+    # pool(conv(x)) at (p, q) is the max over the conv at (2p + i, 2q + j), i.e. over the four
+    # stride-2 convolutions of x shifted by (i, j): the same sums, so the same values exactly.
+    from suctionbench.learning.dense import _conv_pooled
+    from suctionbench.learning.models import max_pool_2x2
+
+    generator = torch.Generator().manual_seed(4)
+    conv = torch.nn.Conv2d(3, 5, 3)
+    x = torch.randn(2, 3, *size, generator=generator)
+    with torch.no_grad():
+        want = max_pool_2x2(torch.nn.functional.conv2d(x, conv.weight, conv.bias, dilation=dilation))
+        got = _conv_pooled(x, conv, dilation)
+    assert got.shape == want.shape and torch.equal(got, want)

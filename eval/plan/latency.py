@@ -5,7 +5,8 @@
 For each policy: the first call in the process (the GQ-CNN's model loading included; scikit-learn
 and torch are imported before timing starts) and the median / max of `--repeats` further calls, each split into the
 support-plane fit, segmentation and planning (`PlanResult.timings`). One process, one thread per
-library default; the machine's other load is not controlled, so read the figures as indicative.
+library default, the allocator set as the command line sets it (`suctionbench.allocator`); the
+machine's other load is not controlled, so read the figures as indicative.
 """
 
 import argparse
@@ -19,6 +20,7 @@ import numpy as np
 import sklearn.linear_model  # noqa: F401  (imported before timing: the CLI pays this once per process)
 import torch  # noqa: F401
 
+from suctionbench.allocator import keep_large_blocks
 from suctionbench.planning import plan_grasp, read_depth
 
 IMAGE = Path(__file__).resolve().parents[2] / "examples" / "scene_mug.png"
@@ -38,8 +40,9 @@ def measure(policy: str, depth: np.ndarray, repeats: int) -> dict:
 
 
 def main(repeats: int) -> None:
+    keep_large_blocks()  # as the command line does at start
     depth = read_depth(IMAGE)
-    rows = [measure(p, depth, repeats) for p in ("random", "centroid", "planarity-centroid", "gqcnn")]
+    rows = [measure(p, depth, repeats) for p in ("random", "centroid", "planarity-centroid", "gqcnn", "fc-gqcnn")]
     print(json.dumps({"image": f"{IMAGE.name} {depth.shape[1]} x {depth.shape[0]}", "repeats": repeats,
                       "machine": f"{platform.machine()}, {platform.python_implementation()} "
                                  f"{platform.python_version()}", "rows": rows}, indent=1))

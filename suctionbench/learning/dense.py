@@ -127,16 +127,15 @@ class DenseStream(nn.Module):
                  stride: int = 1) -> torch.Tensor:
         """The fully connected layer's output (P, F) at P windows (image `batch`, `rows`, `cols`;
         (P,) long) of the trunk's `maps` (computed with `stride`): its s x s taps gathered where the
-        dense form would read them (the final dilation apart), in torch's (C, H, W) flatten order,
-        so the layer's own weights apply. Window (i, j) is the 32 x 32 window whose top-left pixel
-        is (stride i, stride j)."""
-        count, channels, height, width = maps.shape
+        dense form would read them (the final dilation apart), in (row, column, channel) order,
+        with the layer's own weights read in that order (`_fc3_tapwise`). Window (i, j) is the
+        32 x 32 window whose top-left pixel is (stride i, stride j)."""
+        _, channels, height, width = maps.shape
         taps = self.fc_dilation // stride * torch.arange(self.fc_side, device=maps.device)
         r = rows[:, None, None] + taps[None, :, None]
         c = cols[:, None, None] + taps[None, None, :]
-        # Gathered as rows of C from channels-last maps, (P, s, s, C) contiguous, and the layer's
-        # weights read in that order (`_fc3_tapwise`): one copy of the maps instead of a permuted
-        # copy of every window's taps (a context window's taps are re-read by ~81 positions' windows)
+        # Gathered as rows of C from channels-last maps, (P, s, s, C) contiguous: one transposed
+        # copy of the maps instead of a permuted copy of every window's s x s x C taps
         pixels = maps.permute(0, 2, 3, 1).reshape(-1, channels)  # (B h w, C)
         windows = pixels[((batch[:, None, None] * height + r) * width + c).reshape(-1)]
         return torch.relu(F.linear(windows.reshape(len(rows), -1), self._fc3_tapwise(), self.fc3.bias))

@@ -40,8 +40,8 @@ runs in one batch (twice; gqcnn 0.100 s in the same runs). (The compact model be
 dense 0.043-0.045 s; gqcnn was then modelled at 0.15 s from plan times inside benchmark runs,
 where two workers and the simulation share the cores.) With the 48 px default (gqcnn-sensor48)
 the dense policy took 0.095 s while still charged 0.04; after the planning-time work of 2026-11-28
-(bench plan, 20 scenes, seven runs): gqcnn 0.091-0.103 s (charged 0.1), fc-gqcnn 0.050-0.055 s,
-charged 0.06 since. For scale, the paper's Dex-Net 3.0 GQ-CNN policy took about 3.0 s per grasp
+(bench plan, 20 scenes, 12 runs over the work's last steps): gqcnn 0.082-0.103 s (charged 0.1),
+fc-gqcnn 0.049-0.055 s, charged 0.06 since. For scale, the paper's Dex-Net 3.0 GQ-CNN policy took about 3.0 s per grasp
 on a GeForce 980 desktop."""
 PLANNING_S["gqcnn-adv"] = PLANNING_S["gqcnn"]  # the same CEM policy and network, other weights
 

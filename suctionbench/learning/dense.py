@@ -75,6 +75,9 @@ class DenseStream(nn.Module):
             # the monotone ReLU, so the values are the same and the ReLU runs on the pooled map
             if isinstance(self.layers[i][0], nn.ReLU) and isinstance(self.layers[i + 1][0], nn.MaxPool2d):
                 self.layers[i], self.layers[i + 1] = self.layers[i + 1], self.layers[i]
+        self.pooled_convs = frozenset(i for i in range(len(self.layers) - 1) if isinstance(self.layers[i][0], nn.Conv2d)
+                                      and isinstance(self.layers[i + 1][0], nn.MaxPool2d))
+        """Indices in `layers` of the convolutions a max-pool follows directly (`_conv_pooled`)."""
         channels = next(m for m, _ in reversed(self.layers) if isinstance(m, nn.Conv2d)).out_channels
         self.fc_side = round((self.fc3.in_features / channels) ** 0.5)
 
@@ -95,10 +98,10 @@ class DenseStream(nn.Module):
         if stride not in {2**k for k in range(self.max_stride.bit_length())}:
             raise ValueError(f"dense GQ-CNN: stride {stride} is not a power of 2 up to {self.max_stride}")
         x, done = image, 1  # done: the subsampling the strided pools have applied so far
-        layers = iter(self.layers)
-        for module, dilation in layers:
+        layers = enumerate(self.layers)
+        for at, (module, dilation) in layers:
             step = dilation // done  # the layer's taps apart, in the subsampled maps
-            if isinstance(module, nn.Conv2d) and done < stride and self._pool_follows(module):
+            if at in self.pooled_convs and done < stride:
                 next(layers)  # conv, then the pool at stride 2: as four stride-2 convolutions
                 x = _conv_pooled(x, module, step)
                 done *= 2
@@ -118,17 +121,12 @@ class DenseStream(nn.Module):
                 x = module(x)
         return x
 
-    def _pool_follows(self, conv: nn.Conv2d) -> bool:
-        """Whether a max-pool is the layer right after `conv` (ReLUs run after pools: `__init__`)."""
-        at = next(i for i, (module, _) in enumerate(self.layers) if module is conv)
-        return at + 1 < len(self.layers) and isinstance(self.layers[at + 1][0], nn.MaxPool2d)
-
     def features(self, maps: torch.Tensor, batch: torch.Tensor, rows: torch.Tensor, cols: torch.Tensor,
                  stride: int = 1) -> torch.Tensor:
         """The fully connected layer's output (P, F) at P windows (image `batch`, `rows`, `cols`;
         (P,) long) of the trunk's `maps` (computed with `stride`): its s x s taps gathered where the
         dense form would read them (the final dilation apart), in (row, column, channel) order,
-        with the layer's own weights read in that order (`_fc3_tapwise`). Window (i, j) is the
+        with the layer's own weights read in that order. Window (i, j) is the
         32 x 32 window whose top-left pixel is (stride i, stride j)."""
         _, channels, height, width = maps.shape
         taps = self.fc_dilation // stride * torch.arange(self.fc_side, device=maps.device)
@@ -138,19 +136,9 @@ class DenseStream(nn.Module):
         # copy of the maps instead of a permuted copy of every window's s x s x C taps
         pixels = maps.permute(0, 2, 3, 1).reshape(-1, channels)  # (B h w, C)
         windows = pixels[((batch[:, None, None] * height + r) * width + c).reshape(-1)]
-        return torch.relu(F.linear(windows.reshape(len(rows), -1), self._fc3_tapwise(), self.fc3.bias))
-
-    def _fc3_tapwise(self) -> torch.Tensor:
-        """fc3's weight (F, s s C) with its inputs in (row, column, channel) order, not torch's
-        (channel, row, column) flatten order: kept until the weight changes."""
-        weight = self.fc3.weight
-        key = (weight.data_ptr(), weight._version)
-        if getattr(self, "_tapwise_key", None) != key:
-            side = self.fc_side
-            self._tapwise = weight.detach().reshape(len(weight), -1, side, side).permute(0, 2, 3, 1).reshape(
-                len(weight), -1)
-            self._tapwise_key = key
-        return self._tapwise
+        weight = self.fc3.weight  # (F, C s s) in torch's flatten order, read as (F, s s C)
+        tapwise = weight.reshape(len(weight), channels, self.fc_side, self.fc_side).permute(0, 2, 3, 1)
+        return torch.relu(F.linear(windows.reshape(len(rows), -1), tapwise.reshape(len(weight), -1), self.fc3.bias))
 
 
 def _conv_pooled(x: torch.Tensor, conv: nn.Conv2d, dilation: int) -> torch.Tensor:

@@ -471,9 +471,10 @@ def scene_cloud(observation: Observation, config: SamplerConfig) -> SceneCloud:
     approaches = -normals
     along_axis = approaches[..., 2] >= math.cos(config.max_optical_axis_angle)
     downward = -(approaches @ table_normal) >= math.cos(config.max_approach_angle)
-    relaxed = not (candidates & along_axis & downward).any()
+    passing = candidates & along_axis & downward
+    relaxed = not passing.any()
     valid = np.zeros_like(has_depth)
-    valid[box] = candidates if relaxed else candidates & along_axis & downward
+    valid[box] = candidates if relaxed else passing
     return SceneCloud(
         depth=depth, box=box, box_points=intrinsics.deproject(depth[box], corner=(r0, c0)),
         box_smooth_points=smooth_points, box_approaches=approaches, object_mask=object_mask, valid=valid,

@@ -183,7 +183,7 @@ def lattice_batch(pixels: np.ndarray, bins: np.ndarray, angles: np.ndarray,
 
 def _distinct(index: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
     """``np.unique(index, return_inverse=True)`` for integers in [0, size), by marking a table of
-    `size` instead of sorting (the window indices of a plan: ~10^5 slots, ~10^4 pixels)."""
+    `size` instead of sorting (a plan's angle bins, and its windows: ~10^5 slots, ~10^4 pixels)."""
     seen = np.zeros(size, dtype=bool)
     seen[index] = True
     values = np.flatnonzero(seen)
@@ -243,8 +243,7 @@ class FCGQCNNPolicy:
         bins = np.mod(np.rint(angles / step).astype(np.intp), cfg.rotations)
         views = self.exact.images(observation)  # (thumbnail config, image it samples) per image stream
         pose_in = model.stats.normalise_poses(torch.from_numpy(poses.astype(np.float32)))
-        present = np.bincount(bins, minlength=cfg.rotations) > 0  # the bins in use, and each pixel's
-        kinds, bin_of = np.flatnonzero(present), (np.cumsum(present) - 1)[bins]  # (np.unique's, no sort)
+        kinds, bin_of = _distinct(bins, cfg.rotations)  # the bins in use, and each pixel's among them
         with torch.no_grad():  # every bin's lattice in one batch: one resampling and one trunk pass per stream
             features, shared = [], []
             for stream, (thumbnail, image) in enumerate(views):

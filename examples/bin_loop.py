@@ -2,7 +2,7 @@
 
     .venv/bin/python examples/bin_loop.py --task bin-smoke --seed 0
 
-`suctionbench/SuctionBin-v4` shows the bin's depth image with its object regions (`regions`, 1 =
+`suctionbench/SuctionBin-v5` shows the bin's depth image with its object regions (`regions`, 1 =
 the largest); one step is one grasp in the camera frame, as in SuctionPick-v4. The reward counts
 the objects carried to the receptacle; the episode ends when the bin is clear or after K failed
 attempts in a row.
@@ -33,7 +33,7 @@ def topmost_region_middle(observation: dict) -> np.ndarray:
 
 
 def main(task: str = "bin-smoke", seed: int = 0) -> float:
-    env = gymnasium.make("suctionbench/SuctionBin-v4", task=task)
+    env = gymnasium.make("suctionbench/SuctionBin-v5", task=task)
     observation, info = env.reset(seed=seed)
     removed, terminated = 0.0, False
     while not terminated:

@@ -1,5 +1,5 @@
 """Bin picking in clutter (suctionbench.clutter): bin tasks, depth segmentation, the cup's path
-check, filling the bin, the bin benchmark from the CLI, and the SuctionBin-v4 environment."""
+check, filling the bin, the bin benchmark from the CLI, and the SuctionBin-v5 environment."""
 
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ from suctionbench.evaluation.tasks import is_bin_task
 from suctionbench.policies.gqcnn import DEFAULT_MODEL
 from suctionbench.policies.plugins import load_policy
 from suctionbench.sensing.camera import CameraIntrinsics
-from suctionbench.sensing.segmentation import segment_regions
+from suctionbench.sensing.segmentation import SegmentationConfig, convex, segment_regions
 
 SHIPPED = ("bin-smoke", "bin-basic", "bin-typical", "bin-mixed")
 
@@ -88,12 +88,13 @@ def _scene_depth(blocks):
 
 
 def test_segmentation_separates_stacked_and_side_by_side_objects():
-    # Three objects: two side by side at the same height but touching along an edge with faces
-    # 60 deg apart (a crease, no depth step), and one on its own 2 cm higher (a depth step of
-    # 2 cm > the 8 mm jump threshold).
+    # Three objects: two side by side at the same height whose top faces, tilted 30 deg each way,
+    # meet in a valley at x = 0 (a concave crease of 60 deg, no depth step: each face descends
+    # towards the other, depth 0.536 m at its outer edge and 0.564 m where they meet), and one on its
+    # own 2 cm higher (a depth step of 2 cm > the 8 mm jump threshold).
     blocks = [
-        (-0.05, 0.0, -0.03, 0.03, 0.05, math.radians(30)),
-        (0.0, 0.05, -0.03, 0.03, 0.05, math.radians(-30)),
+        (-0.05, 0.0, -0.03, 0.03, 0.05, math.radians(-30)),
+        (0.0, 0.05, -0.03, 0.03, 0.05, math.radians(30)),
         (-0.03, 0.03, 0.035, 0.05, 0.07, 0.0),
     ]
     depth = _scene_depth(blocks)
@@ -101,6 +102,32 @@ def test_segmentation_separates_stacked_and_side_by_side_objects():
     regions = segment_regions(depth, CAMERA, workspace)
     assert len(regions) == 3
     assert not np.any(np.sum(regions, axis=0) > 1)  # disjoint
+
+
+def test_segmentation_keeps_an_object_whole_across_its_own_convex_edge():
+    # A roof-shaped top: the same two 30 deg faces meeting in a ridge instead (each rises towards
+    # the other, depth 0.564 m at its outer edge and 0.536 m at x = 0), as the top and the side of
+    # one object do: a convex crease, not a boundary. (Two objects leaning together into a ridge
+    # look the same and merge: the segmentation's documented limit.) Cutting convex creases too,
+    # the segmentation before 2026-11-28, splits it in two.
+    roof = [(-0.05, 0.0, -0.03, 0.03, 0.05, math.radians(30)), (0.0, 0.05, -0.03, 0.03, 0.05, math.radians(-30))]
+    depth = _scene_depth(roof)
+    workspace = depth < 0.6 - 0.005
+    regions = segment_regions(depth, CAMERA, workspace)
+    assert len(regions) == 1
+    assert regions[0].sum() > 0.9 * workspace.sum()
+    assert len(segment_regions(depth, CAMERA, workspace, SegmentationConfig(cut_convex_creases=True))) == 2
+
+
+def test_convexity_criterion_on_a_box_edge_and_a_valley():
+    # The derivations in `convex`'s docstring: a box's top (n = z at (0, 0, 1)) and side (n = x at
+    # (1, 0, 0.5)) bend away: (n1 - n2) . (p1 - p2) = 1.5 > 0; two faces of a V, n = (+-1, 0, 1) / sqrt 2
+    # at (-+1, 0, 1): -2 sqrt 2 < 0. Swapping the two points swaps both differences: the same sign.
+    z, x = np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0])
+    assert convex(z, x, np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.5]))
+    assert convex(x, z, np.array([1.0, 0.0, 0.5]), np.array([0.0, 0.0, 1.0]))
+    left, right = np.array([1.0, 0.0, 1.0]) / np.sqrt(2), np.array([-1.0, 0.0, 1.0]) / np.sqrt(2)
+    assert not convex(left, right, np.array([-1.0, 0.0, 1.0]), np.array([1.0, 0.0, 1.0]))
 
 
 def test_segmentation_keeps_one_flat_face_whole_under_noise():
@@ -225,7 +252,7 @@ def test_bin_eval_rejects_bad_masks_and_writes_nothing(tmp_path):
 
 # -- the environment --------------------------------------------------------------------------------
 def test_bin_env_passes_gymnasium_checker_and_is_seeded():
-    env = gymnasium.make("suctionbench/SuctionBin-v4", task="bin-smoke")
+    env = gymnasium.make("suctionbench/SuctionBin-v5", task="bin-smoke")
     with pytest.warns(UserWarning):  # the checker's advice on unbounded boxes; not errors
         check_env(env.unwrapped, skip_render_check=True)
     a, info_a = env.reset(seed=5)
@@ -236,7 +263,7 @@ def test_bin_env_passes_gymnasium_checker_and_is_seeded():
 
 
 def test_bin_env_invalid_action_costs_an_attempt_and_moves_nothing():
-    env = gymnasium.make("suctionbench/SuctionBin-v4", task="bin-smoke")
+    env = gymnasium.make("suctionbench/SuctionBin-v5", task="bin-smoke")
     obs, _ = env.reset(seed=1, options={"trial": 0})
     after, reward, terminated, truncated, info = env.step(np.zeros(6, dtype=np.float32))
     assert reward == 0.0 and info["failure"] == "invalid_action" and info["failures_in_row"] == 1

@@ -183,3 +183,11 @@ def test_the_previous_physics_versions_are_refused_with_the_current_id(old):
     with pytest.raises(gymnasium.error.DeprecatedEnv, match="v4"), warnings.catch_warnings():
         warnings.simplefilter("ignore", DeprecationWarning)  # gymnasium warns as well as raising
         gymnasium.make(f"suctionbench/SuctionPick-{old}")
+
+
+def test_the_bin_env_before_whole_object_regions_is_refused_with_the_current_id():
+    # SuctionBin-v4 segmented objects at their own convex edges, so its regions (and the per-region
+    # policies' results) are not comparable with v5's.
+    with pytest.raises(gymnasium.error.DeprecatedEnv, match="v5"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        gymnasium.make("suctionbench/SuctionBin-v4")

@@ -11,10 +11,14 @@ part-filled container's liquid levels in the pose the object rests in (`objects.
 stayed in the end that was its bottom when upright; v4 (2026-11-27): levelling turns the
 inertial frame of a body built with an unrotated one (an upright can) in the kinematics too, so
 its inertia and collision bounding boxes follow the levelled liquid (v3 left them turned: parts
-missed contacts). Making an older id raises gymnasium's DeprecatedEnv, naming the ``-v4`` to use.
+missed contacts); SuctionBin-v5 (2026-11-28, the same physics as v4): its ``regions`` come from a
+segmentation that no longer cuts an object at its own convex edges (`sensing.segmentation`), so
+per-region policies see whole objects. Making an older id raises gymnasium's DeprecatedEnv, naming
+the newest to use.
 
     >>> import gymnasium, suctionbench
     >>> env = gymnasium.make("suctionbench/SuctionPick-v4", object_set="basic")
+    >>> bins = gymnasium.make("suctionbench/SuctionBin-v5", task="bin-basic")
 """
 
 from __future__ import annotations
@@ -25,7 +29,7 @@ import gymnasium
 
 ENVIRONMENTS: dict[str, str] = {
     "suctionbench/SuctionPick-v4": "suctionbench.envs.suction_pick:SuctionPickEnv",
-    "suctionbench/SuctionBin-v4": "suctionbench.envs.suction_bin:SuctionBinEnv",
+    "suctionbench/SuctionBin-v5": "suctionbench.envs.suction_bin:SuctionBinEnv",
 }
 """Environment id -> entry point ("module:Class"), imported only by gymnasium.make."""
 

@@ -1,4 +1,4 @@
-"""`suctionbench/SuctionBin-v4`: picking a cluttered bin clear, one grasp attempt per step.
+"""`suctionbench/SuctionBin-v5`: picking a cluttered bin clear, one grasp attempt per step.
 
 A thin layer over `suctionbench.clutter.runner.BinRunner` (the runner fills the bin, renders,
 labels and executes; the benchmark's `eval --task bin-*` runs the same code with a policy in the
@@ -93,7 +93,7 @@ class SuctionBinEnv(gymnasium.Env):
 
     ```python
     gymnasium.make(
-        "suctionbench/SuctionBin-v4",
+        "suctionbench/SuctionBin-v5",
         task="bin-basic",        # bin-smoke, bin-basic, bin-typical, bin-mixed, or a bin-task TOML
         cup="default",           # cup preset, shared by the simulated cup and the labels
         camera="primesense",     # camera preset or intrinsics TOML
@@ -124,6 +124,10 @@ class SuctionBinEnv(gymnasium.Env):
       jug) has its inertial frame turned in the kinematics too; in v3 its inertia acted about the
       built axes and its collision bounding boxes sat turned, so parts missed contacts (a lying
       can's up to 17 mm; bins that ended in a deep interpenetration while filling).
+    - v5 (2026-11-28): the same physics; the `regions` observation cuts an object only at concave
+      creases and depth steps, no longer at its own convex edges (a box's top and side, a mug's
+      top and wall are one region), so a policy planning per region reads the whole object's
+      centroid and extent (`sensing.segmentation.convex`; eval/bin/README.md).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 1}

@@ -10,9 +10,9 @@ RUNS=${1:-runs/bin}
 REPORT=${2:-eval/bin}
 SB=${SB:-suctionbench}
 mkdir -p "$RUNS"
-# The committed results were measured with gqcnn's 30 deg seed cone, every image policy's default
-# until 2f4b2f4 (60 deg since, eval/README.md); the image policies keep it here until the bins are
-# rerun with the new default (their report rows then carry the option in their names).
+# The image policies seed within gqcnn's 30 deg cone here, their default until 2f4b2f4 (60 deg since,
+# eval/README.md): in bins the default GQ-CNN lost with the wider cone in every task (eval/bin/README.md,
+# "Probe: the 60 deg seed cone in bins"), so the bin benchmark keeps the narrower one.
 CONE=(--policy-arg 'sampler={max_optical_axis_angle=0.5235987755982988}')
 run() {  # name, eval options...; a finished run (its .done marker) is kept
   local name=$1; shift

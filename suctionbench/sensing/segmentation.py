@@ -122,8 +122,9 @@ def segment_regions(depth: np.ndarray, intrinsics: CameraIntrinsics, workspace: 
         before[axis], after[axis], centre[axis] = slice(None, -2 * k), slice(2 * k, None), slice(k, -k)
         b, a = tuple(before), tuple(after)
         crease = has_normal[b] & has_normal[a] & (np.einsum("...k,...k->...", normals[b], normals[a]) < cos_crease)
-        if not config.cut_convex_creases:
-            crease &= ~convex(normals[b], normals[a], points[b], points[a])
+        if not config.cut_convex_creases:  # of the creases (a few % of the pixels), the concave ones
+            at = np.nonzero(crease)
+            crease[at] = ~convex(normals[b][at], normals[a][at], points[b][at], points[a][at])
         boundary[tuple(centre)] |= crease
     labels, count = ndimage.label(inside & ~boundary)
     if count == 0:

@@ -77,6 +77,7 @@ OPTION_RULES: dict[str, Rule] = {
     "episodes": COUNT, "memory_grasps": COUNT, "reference_datapoints": COUNT, "reference_grasps": Rule(0, COUNT_MAX),
     "top": Rule(0, COUNT_MAX, meaning="rows of the table; 0 = none"),
     "proposals_per_image": COUNT,
+    "grasps_per_image": Rule(0, COUNT_MAX, meaning="0 = every visible candidate"),
     "thumbnail_crop": Rule(16, 96, meaning="image pixels the grasp thumbnail's 32 x 32 spans; at most gqcnn's "
                                            "96, the crop a grasp's visibility margin keeps inside the image"),
     "average": Rule(0.0, 1.0, low_open=True, meaning="the moving average's decay per step, below 1"),

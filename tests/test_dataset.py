@@ -350,7 +350,7 @@ def test_a_dataset_in_the_sensors_noise_says_so_and_paper_datasets_keep_their_fi
 
     card = read_card(reference)
     settings = to_dict(CONFIG)
-    for key in ("proposals", "proposals_per_image", "noise_model", "thumbnail"):
+    for key in ("proposals", "proposals_per_image", "noise_model", "thumbnail", "grasps_per_image"):
         del settings[key]
     old = {"config": settings, "camera": card["camera"], "objects": KEYS}
     assert card["fingerprint"] == hashlib.sha256(json.dumps(old, sort_keys=True).encode()).hexdigest()[:16]
@@ -362,6 +362,33 @@ def test_a_dataset_in_the_sensors_noise_says_so_and_paper_datasets_keep_their_fi
         gen.generate_dataset(tmp_path / "k", [str(records[0].directory)], KEYS[:1], "primesense",
                              dataclasses.replace(CONFIG, noise_model="kinect"))
     assert not (tmp_path / "k").exists()  # refused before anything is written
+
+
+def test_grasps_per_image_spreads_an_objects_candidates_over_more_images():
+    # With a cap, each image records at most that many of its visible candidates (distinct ones),
+    # so the same quota takes more images. The cap draws which candidates, not their labels: a
+    # (stable pose, candidate) pair carries the same robust label as without the cap (each pose's
+    # labels have their own seed).
+    import dataclasses
+
+    record = load_object(KEYS[0])
+    config = dataclasses.replace(CONFIG, grasps_per_object=120)
+    runs = {cap: gen.generate_unit(gen.Unit(0, 90), str(record.directory), "primesense",
+                                   dataclasses.replace(config, grasps_per_image=cap)) for cap in (0, 12)}
+    images = {cap: np.unique(a["image_labels"], return_counts=True) for cap, a in runs.items()}
+    assert images[12][1].max() <= 12 and images[0][1].max() > 12
+    assert len(images[12][0]) > len(images[0][0])
+    capped = runs[12]
+    for image in images[12][0]:
+        ids = capped["grasp_labels"][capped["image_labels"] == image]
+        assert len(np.unique(ids)) == len(ids)
+    label = {(int(s), int(g)): r for s, g, r in zip(runs[0]["pose_labels"], runs[0]["grasp_labels"],
+                                                     runs[0]["robust_suction_wrench_resistance"], strict=True)}
+    shared = [(label[(int(s), int(g))], r) for s, g, r in zip(capped["pose_labels"], capped["grasp_labels"],
+                                                               capped["robust_suction_wrench_resistance"], strict=True)
+              if (int(s), int(g)) in label]
+    assert len(shared) >= 10
+    np.testing.assert_array_equal(*np.array(shared).T)
 
 
 @pytest.mark.parametrize("change", [{"sampling": "mean"}, {"crop_size": 64}], ids=["block-means", "crop-64"])

@@ -47,6 +47,9 @@ def generate(
     workers: Annotated[int, typer.Option(help="Worker processes (0 = all cores).")] = 0,
     address: Annotated[str | None, typer.Option(help="Ray cluster address (engine ray).")] = None,
     grasps_per_object: Annotated[int, typer.Option(help="Grasp candidates per object.")] = 200,
+    grasps_per_image: Annotated[int, typer.Option(help="At most this many of an image's visible candidates "
+                                                       "recorded, drawn at random (0 = all): many candidates "
+                                                       "per object, spread over many images.")] = 0,
     cup: Annotated[str, typer.Option(help="Cup preset: default or paper.")] = "default",
     load: Annotated[str, typer.Option(help="Loads the labels test: episode (the pick's inertial load, its "
                                            "arrivals and the touch-down's press: what the benchmark scores) or "
@@ -97,6 +100,7 @@ def generate(
                              f"{exc}") from None
         config = GenerationConfig(
             datapoints=datapoints, seed=seed, grasps_per_object=grasps_per_object,
+            grasps_per_image=grasps_per_image,
             label=label, scene=scene, noise_model=noise, thumbnail=thumbnail,
             proposals=None if proposals is None else str(proposals.resolve()),
             proposals_per_image=proposals_per_image,

@@ -87,6 +87,12 @@ class GenerationConfig:
     max_images_per_object: int = 400
     """An object whose visible grasps cannot fill its quota stops after this many images."""
 
+    grasps_per_image: int = 0
+    """At most this many of an image's visible candidates are recorded, a uniform random draw of
+    them; 0: all of them. With many candidates per object (a small set, whose few robust grasps
+    only a dense sampling finds) it keeps the images many: without it an image records every one
+    of its thousands of visible candidates and the object's quota is spent in a few views."""
+
     datapoints_per_shard: int = 1000
     """Datapoints per tensor file (Dex-Net: 1000)."""
 
@@ -176,6 +182,8 @@ def config_fingerprint(config: GenerationConfig, camera: dict[str, Any], objects
         del settings["noise_model"]
     if config.thumbnail == THUMBNAIL_GQCNN:  # and before the thumbnail's sampling was
         del settings["thumbnail"]
+    if config.grasps_per_image == 0:  # and before an image's share was capped
+        del settings["grasps_per_image"]
     blob = json.dumps(what, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
@@ -295,7 +303,10 @@ def generate_unit(unit: Unit, object_dir: str, camera: str, config: GenerationCo
             p_cam, v_cam = (p_world - origin) @ rot, v_world @ rot
             pixels, depths, angles = project_grasps(p_cam, v_cam, intrinsics)
             keep = visible_mask(pixels, depths, depth) & (-v_world[:, 2] >= math.cos(config.max_approach_angle))
-            idx = np.flatnonzero(keep)[: unit.quota - count]
+            idx = np.flatnonzero(keep)
+            if 0 < config.grasps_per_image < len(idx):
+                idx = np.sort(rng.choice(idx, config.grasps_per_image, replace=False))
+            idx = idx[: unit.quota - count]
             if len(idx) == 0:
                 continue
             lab = labels_in_pose(s)

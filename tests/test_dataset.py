@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import filecmp
+import json
 import shutil
 from pathlib import Path
 
@@ -129,6 +130,38 @@ def test_shards_assembled_on_several_threads_are_the_same_bytes(reference, tmp_p
     assert same_tensors(reference, out)
 
 
+@pytest.mark.parametrize("threads", [1, 2])
+def test_assembly_decompresses_each_unit_once_however_many_shards_it_spans(reference, tmp_path, monkeypatch,
+                                                                           threads):
+    # 8-datapoint shards over 50-datapoint units: each unit spans 7-8 shards. Reading the whole
+    # unit for every shard made assembly quadratic in a unit's size (a small set's object: 120,000
+    # datapoints, 120 shards); each unit is now read whole once, and the shards hold the same
+    # datapoints in the same order.
+    from suctionbench.dataset.storage import DatasetWriter
+
+    out = tmp_path / "small_shards"
+    shutil.copytree(reference, out)
+    shutil.rmtree(out / "tensors")
+    whole = []
+    load = gen.load_unit
+
+    def spy(directory, index, fields=gen.UNIT_FIELDS):
+        if fields == gen.UNIT_FIELDS:
+            whole.append(index)
+        return load(directory, index, fields)
+
+    monkeypatch.setattr(gen, "load_unit", spy)
+    units = gen.plan_units(len(KEYS), CONFIG.datapoints, CONFIG)
+    stats = gen._assemble_shards(out, units, DatasetWriter(out, datapoints_per_shard=8), 8, CONFIG.label_threshold,
+                                 threads=threads)
+    assert stats["shards"] == 19 and sorted(whole) == [0, 1, 2]
+    card = json.loads((out / "config.json").read_text())
+    (out / "config.json").write_text(json.dumps({**card, "datapoints_per_file": 8}))
+    small, full = DatasetReader(out), DatasetReader(reference)
+    for name in ("robust_suction_wrench_resistance", "grasp_labels", "depth_ims_tf_table"):
+        np.testing.assert_array_equal(small.field(name), full.field(name))
+
+
 def test_corrupt_unit_is_reported_and_regenerated(reference, tmp_path):
     out = tmp_path / "corrupt"
     run(out)
@@ -224,7 +257,6 @@ def test_smoothed_approaches_blend_faces_at_edges_like_a_depth_normal():
 
 
 def test_dataset_show_reports_generation_time_and_size(reference):
-    import json
 
     from typer.testing import CliRunner
 
@@ -344,7 +376,6 @@ def test_a_dataset_in_the_sensors_noise_says_so_and_paper_datasets_keep_their_fi
     # for "paper" the fingerprint is the hash of the settings without the field, as it was.
     import dataclasses
     import hashlib
-    import json
 
     from suctionbench.config import to_dict
 

@@ -518,15 +518,41 @@ def _generation_summary(runs: list[dict[str, Any]], units: int, out: Path, datap
             "bytes_per_datapoint": round(size / max(datapoints, 1), 1)}
 
 
+class _RecentUnits:
+    """The last `keep` units the shard writers read, each decompressed once (`_assemble_shards`):
+    shards are written in order, so the few in flight read the same one or two units."""
+
+    def __init__(self, out: Path, units: list[Unit], keep: int):
+        import threading
+        from collections import OrderedDict
+
+        self.out, self.units, self.keep = out, units, max(1, keep)
+        self.loaded: OrderedDict[int, dict[str, np.ndarray]] = OrderedDict()
+        self.lock = threading.Lock()
+
+    def get(self, position: int) -> dict[str, np.ndarray]:
+        """The arrays of the unit at `position` in `units` (loaded under the lock, so once)."""
+        with self.lock:
+            if position not in self.loaded:
+                self.loaded[position] = load_unit(self.out, self.units[position].index)
+                while len(self.loaded) > self.keep:
+                    self.loaded.popitem(last=False)
+            self.loaded.move_to_end(position)
+            return self.loaded[position]
+
+
 def _assemble_shards(out: Path, units: list[Unit], writer: Any, per_shard: int, threshold: float,
                      threads: int = 1) -> dict[str, Any]:
     """Cut the units, in order, into fixed-size shards, `threads` shards at a time.
 
     A first pass reads each unit's three small label arrays (an ``.npz`` decompresses only the
-    members asked for) to place every unit in the datapoint order; then each shard reads the one
-    to three units it spans and is written on its own (`DatasetWriter` writes shards independently;
-    compression and hashing release the GIL, so threads run in parallel). The shards are the same
-    bytes for any thread count; memory holds at most `threads` shards' units.
+    members asked for) to place every unit in the datapoint order; then each shard takes its slice
+    of the one to three units it spans and is written on its own (`DatasetWriter` writes shards
+    independently; compression and hashing release the GIL, so threads run in parallel). A unit is
+    decompressed once for all its shards (`_RecentUnits`): a unit of 120,000 datapoints (a small
+    set's object) spans 120 shards, and reading it whole for each made assembly quadratic in the
+    unit's size. The shards are the same bytes for any thread count; memory holds at most
+    `threads` + 1 units.
     """
     counts, positives, image_ids, object_ids = [], 0, [], []
     for unit in units:
@@ -539,13 +565,15 @@ def _assemble_shards(out: Path, units: list[Unit], writer: Any, per_shard: int, 
     total = int(starts[-1])
     shards = -(-total // per_shard)
 
+    recent = _RecentUnits(out, units, threads + 1)
+
     def write(shard: int) -> None:
         lo, hi = shard * per_shard, min((shard + 1) * per_shard, total)
         first = int(np.searchsorted(starts, lo, side="right")) - 1  # the unit holding datapoint lo
         last = int(np.searchsorted(starts, hi, side="left"))  # one past the unit holding datapoint hi - 1
-        parts = [load_unit(out, units[u].index) for u in range(first, last)]
-        offset = lo - int(starts[first])
-        writer.write_shard(shard, {name: np.concatenate([p[name] for p in parts])[offset:offset + hi - lo]
+        spans = [(recent.get(u), max(lo - int(starts[u]), 0), min(hi, int(starts[u + 1])) - int(starts[u]))
+                 for u in range(first, last)]  # (unit, its first and one-past-last datapoint in the shard)
+        writer.write_shard(shard, {name: np.concatenate([part[name][a:b] for part, a, b in spans])
                                    for name in UNIT_FIELDS})
 
     if threads <= 1:

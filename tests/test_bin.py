@@ -297,10 +297,13 @@ def test_generate_bin_scene_writes_seeded_cluttered_datapoints(tmp_path):
     assert len(np.unique(first["object_labels"])) > 1
 
 
-def test_generate_rejects_an_unknown_scene(tmp_path):
-    result = CliRunner().invoke(app, ["generate", "--objects", "basic", "--datapoints", "10", "--scene", "heap",
+@pytest.mark.parametrize("options, named", [(["--scene", "heap"], "--scene"),
+                                             (["--scene", "bin", "--grasps-per-image", "5"], "--grasps-per-image")],
+                         ids=["unknown-scene", "cap-in-bins"])
+def test_generate_rejects_an_unknown_scene_and_options_a_bin_does_not_read(tmp_path, options, named):
+    result = CliRunner().invoke(app, ["generate", "--objects", "basic", "--datapoints", "10", *options,
                                       "--out", str(tmp_path / "d"), "--json"])
-    assert result.exit_code == 2 and "--scene" in json.loads(result.stdout.strip().splitlines()[-1])["error"]
+    assert result.exit_code == 2 and named in json.loads(result.stdout.strip().splitlines()[-1])["error"]
     assert not (tmp_path / "d").exists()  # nothing half-written
 
 

@@ -5,7 +5,7 @@ given path, e.g. the current code against an older one checked out by `git archi
     python eval/dataset/assembly_time.py . DATASET 1
     python eval/dataset/assembly_time.py OLD DATASET 1
 
-Writes the shards into a temporary folder beside this file's caller and removes it; the dataset is
+Writes the shards into a temporary folder in the working directory and removes it; the dataset is
 only read."""
 
 import shutil
@@ -26,7 +26,7 @@ try:
     for index in range(count):
         source = gen.unit_path(dataset, index)
         (tmp / "units" / source.name).symlink_to(source)
-        units.append(gen.Unit(index, len(gen.load_unit(dataset, index, ("object_labels",))["object_labels"])))
+        units.append(gen.Unit(index, quota=0))  # assembly counts each unit's datapoints itself
     per_shard = 1000
     start = time.perf_counter()
     stats = gen._assemble_shards(tmp, units, DatasetWriter(tmp, datapoints_per_shard=per_shard), per_shard, 0.2,

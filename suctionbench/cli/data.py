@@ -88,9 +88,6 @@ def generate(
             raise InputError(f"--thumbnail-sampling '{thumbnail_sampling}': unknown (known: {', '.join(SAMPLINGS)})")
         if proposals is not None and scene != "table":
             raise InputError(f"--proposals with --scene {scene}: on-policy grasps are proposed on table scenes only")
-        if grasps_per_image and scene != "table":
-            raise InputError(f"--grasps-per-image with --scene {scene}: the cap applies to table scenes only "
-                             f"(a bin's images share its fixed quota)")
         output_dir(out, "--out")
         require_disk(out, datapoints * BYTES_PER_DATAPOINT, f"--datapoints {datapoints}")
         require_memory(label_memory(grasps_per_object, label.perturbation.num_samples)

@@ -18,7 +18,9 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import threading
 import time
+from collections import OrderedDict
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -425,6 +427,9 @@ def generate_dataset(
     check_engine(engine)
     if config.scene not in SCENES:  # before anything is written
         raise InputError(f"--scene '{config.scene}': unknown (known: {', '.join(SCENES)})")
+    if config.grasps_per_image and config.scene != "table":
+        raise InputError(f"--grasps-per-image with --scene {config.scene}: the cap applies to table scenes only "
+                         f"(a bin's images share its fixed quota)")
     if config.datapoints < 1:
         raise InputError(f"--datapoints {config.datapoints}: must be at least 1")
     check_noise_model(config.noise_model)
@@ -523,9 +528,6 @@ class _RecentUnits:
     shards are written in order, so the few in flight read the same one or two units."""
 
     def __init__(self, out: Path, units: list[Unit], keep: int):
-        import threading
-        from collections import OrderedDict
-
         self.out, self.units, self.keep = out, units, max(1, keep)
         self.loaded: OrderedDict[int, dict[str, np.ndarray]] = OrderedDict()
         self.lock = threading.Lock()

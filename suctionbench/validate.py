@@ -78,6 +78,7 @@ OPTION_RULES: dict[str, Rule] = {
     "top": Rule(0, COUNT_MAX, meaning="rows of the table; 0 = none"),
     "proposals_per_image": COUNT,
     "grasps_per_image": Rule(0, COUNT_MAX, meaning="0 = every visible candidate"),
+    "max_images_per_object": Rule(1, 100_000, meaning="image ids hold 100,000 images an object"),
     "thumbnail_crop": Rule(16, 96, meaning="image pixels the grasp thumbnail's 32 x 32 spans; at most gqcnn's "
                                            "96, the crop a grasp's visibility margin keeps inside the image"),
     "average": Rule(0.0, 1.0, low_open=True, meaning="the moving average's decay per step, below 1"),

@@ -328,7 +328,8 @@ def cases(p: dict[str, Path]) -> list[Case]:
                    ("--grasps-per-object", "0"), ("--grasps-per-object", "100000000"), ("--seed", "-1"),
                    ("--workers", "-1"), ("--engine", "spark"), ("--load", "dynamic"), ("--noise", "kinect"),
                    ("--thumbnail-sampling", "median"), ("--thumbnail-crop", "8"), ("--thumbnail-crop", "x"),
-                   ("--thumbnail-crop", "200")):
+                   ("--thumbnail-crop", "200"), ("--max-images-per-object", "0"),
+                   ("--max-images-per-object", "100001")):
         base = {"--datapoints": "4"}
         base[opt] = v
         add("generate", *g, *[x for kv in base.items() for x in kv], "--out", r / f"gen_{opt[2:]}_{v}")

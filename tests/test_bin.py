@@ -298,8 +298,10 @@ def test_generate_bin_scene_writes_seeded_cluttered_datapoints(tmp_path):
 
 
 @pytest.mark.parametrize("options, named", [(["--scene", "heap"], "--scene"),
-                                             (["--scene", "bin", "--grasps-per-image", "5"], "--grasps-per-image")],
-                         ids=["unknown-scene", "cap-in-bins"])
+                                             (["--scene", "bin", "--grasps-per-image", "5"], "--grasps-per-image"),
+                                             (["--scene", "bin", "--max-images-per-object", "5"],
+                                              "--max-images-per-object")],
+                         ids=["unknown-scene", "cap-in-bins", "image-cap-in-bins"])
 def test_generate_rejects_an_unknown_scene_and_options_a_bin_does_not_read(tmp_path, options, named):
     result = CliRunner().invoke(app, ["generate", "--objects", "basic", "--datapoints", "10", *options,
                                       "--out", str(tmp_path / "d"), "--json"])

@@ -422,6 +422,35 @@ def test_grasps_per_image_spreads_an_objects_candidates_over_more_images():
     np.testing.assert_array_equal(*np.array(shared).T)
 
 
+def test_a_dataset_smaller_than_asked_says_which_objects_stopped_short(tmp_path):
+    # An object whose visible candidates cannot fill its share in `max_images_per_object` images
+    # stops there. One image of the tea box shows at most its 40 candidates (CONFIG), so with one
+    # image per object a share of 75 cannot be met: the card lists the unit with what it holds,
+    # and the CLI adds a note naming the object and the remedy (exit 0: the data is valid).
+    import dataclasses
+
+    from typer.testing import CliRunner
+
+    from suctionbench.cli import app
+
+    record = load_object(KEYS[0])
+    config = dataclasses.replace(CONFIG, datapoints=75, max_images_per_object=1)
+    card = gen.generate_dataset(tmp_path / "short", [str(record.directory)], KEYS[:1], "primesense", config)
+    assert 0 < card["datapoints"] <= 40
+    assert card["short_units"] == [{"unit": 0, "object": KEYS[0], "datapoints": card["datapoints"], "quota": 75}]
+    assert DatasetReader(tmp_path / "short").num_datapoints == card["datapoints"]
+    full = gen.generate_dataset(tmp_path / "full", [str(record.directory)], KEYS[:1], "primesense",
+                                dataclasses.replace(config, max_images_per_object=gen.MAX_IMAGES_PER_UNIT))
+    assert full["datapoints"] == 75 and full["short_units"] == []
+    result = CliRunner().invoke(app, ["generate", "--objects", str(record.directory), "--datapoints", "75",
+                                      "--grasps-per-object", "40", "--max-images-per-object", "1",
+                                      "--out", str(tmp_path / "cli"), "--workers", "1", "--json"])
+    assert result.exit_code == 0, result.output
+    line = json.loads(result.stdout.strip().splitlines()[-1])
+    assert line["ok"] and line["datapoints"] < 75 and line["short_units"] == 1
+    assert "of the 75 datapoints asked for" in result.stderr and "--max-images-per-object 1" in result.stderr
+
+
 @pytest.mark.parametrize("change", [{"sampling": "mean"}, {"crop_size": 64}], ids=["block-means", "crop-64"])
 def test_grasp_thumbnail_options_change_only_the_grasp_thumbnails_of_a_dataset(reference, tmp_path, change):
     # The sampling and the crop decide only how the grasp thumbnail reads the noisy image: the

@@ -15,6 +15,7 @@ from suctionbench.cli.common import (
     SeedOpt,
     app,
     dataset_app,
+    note,
     print_kv,
     print_rows,
     progress_bar,
@@ -66,6 +67,9 @@ def generate(
     thumbnail_crop: Annotated[int, typer.Option(help="Image pixels the 32 x 32 grasp thumbnail spans (gqcnn's 96: "
                                                      "3 image pixels a thumbnail pixel; 64 or 32 see the cup's "
                                                      "~13 px footprint finer, in a smaller field).")] = 96,
+    max_images_per_object: Annotated[int, typer.Option(help="An object whose visible candidates cannot fill its "
+                                                            "share of --datapoints stops after this many images "
+                                                            "(the dataset is then smaller; a note says so).")] = 400,
     proposals: Annotated[Path | None, typer.Option(help="A trained model's directory: label its dense policy's best "
                                                        "grasps on every image too (on-policy data).")] = None,
     proposals_per_image: Annotated[int, typer.Option(help="With --proposals: the policy's best grasps per image "
@@ -103,7 +107,7 @@ def generate(
             grasps_per_image=grasps_per_image,
             label=label, scene=scene, noise_model=noise, thumbnail=thumbnail,
             proposals=None if proposals is None else str(proposals.resolve()),
-            proposals_per_image=proposals_per_image,
+            proposals_per_image=proposals_per_image, max_images_per_object=max_images_per_object,
         )
         start = time.perf_counter()
         with progress_bar(datapoints, "generating", not as_json) as advance:
@@ -116,11 +120,25 @@ def generate(
         summary = {k: card[k] for k in ("datapoints", "shards", "positive_rate", "fingerprint")}
         summary.update(out=str(out), seconds=round(elapsed, 2), datapoints_per_s=round(card["datapoints"] / elapsed, 1),
                        regenerated_corrupt_units=len(card.get("regenerated_corrupt_units", [])))
+        summary["short_units"] = len(card.get("short_units", []))
         if not as_json:
             print_rows("dataset", [summary])
+        if card["datapoints"] < datapoints:
+            note(short_dataset_note(card, datapoints, max_images_per_object))
         return summary
 
     run_command(as_json, body)
+
+
+def short_dataset_note(card: dict[str, Any], requested: int, max_images: int) -> str:
+    """The note a dataset smaller than asked gets: how much, which objects stopped short, the remedy."""
+    short = card.get("short_units", [])
+    names = ", ".join(f"{u['object'] or 'bin ' + str(u['unit'])} {u['datapoints']:,} of {u['quota']:,}"
+                      for u in short[:5])
+    more = f" and {len(short) - 5} more" if len(short) > 5 else ""
+    return (f"the dataset holds {card['datapoints']:,} of the {requested:,} datapoints asked for: {len(short)} "
+            f"object(s) stopped at --max-images-per-object {max_images} short of their share ({names}{more}); "
+            f"raise it, or --grasps-per-image, for more")
 
 
 @dataset_app.command("show")

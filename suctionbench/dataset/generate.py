@@ -430,6 +430,11 @@ def generate_dataset(
     if config.grasps_per_image and config.scene != "table":
         raise InputError(f"--grasps-per-image with --scene {config.scene}: the cap applies to table scenes only "
                          f"(a bin's images share its fixed quota)")
+    if config.max_images_per_object != GenerationConfig.max_images_per_object and config.scene != "table":
+        raise InputError(f"--max-images-per-object with --scene {config.scene}: it bounds a table scene's object "
+                         f"(a bin's images are set by its quota)")
+    if not 1 <= config.max_images_per_object <= MAX_IMAGES_PER_UNIT:  # image ids number MAX_IMAGES_PER_UNIT a unit
+        raise InputError(f"--max-images-per-object {config.max_images_per_object}: must be 1 - {MAX_IMAGES_PER_UNIT:,}")
     if config.datapoints < 1:
         raise InputError(f"--datapoints {config.datapoints}: must be at least 1")
     check_noise_model(config.noise_model)
@@ -490,11 +495,22 @@ def generate_dataset(
     assemble = time.perf_counter()
     stats = _assemble_shards(out, units, writer, config.datapoints_per_shard, config.label_threshold, max(1, workers))
     write_splits(out, stats.pop("image_ids"), stats.pop("object_ids"), val_fraction=0.2, seed=config.seed)
+    stats["short_units"] = short_units(units, stats.pop("unit_datapoints"), object_keys, config.scene)
     this_run["assembly_seconds"] = round(time.perf_counter() - assemble, 1)
     card.update(stats, status="complete", regenerated_corrupt_units=corrupt, rewritten_shard_problems=shard_problems,
                 generation=_generation_summary(runs, len(units), out, stats["datapoints"]))
     write_card(out, card, datapoints_per_shard=config.datapoints_per_shard)
     return card
+
+
+def short_units(units: list[Unit], held: list[int], object_keys: list[str], scene: str) -> list[dict[str, Any]]:
+    """The units that hold fewer datapoints than their quota, for the card's ``short_units``: an
+    object whose visible candidates fill fewer than its quota in `max_images_per_object` images
+    stops there, and the dataset is that much smaller than asked (a small set with few candidates
+    per image, or a tiny object). Each: the unit, its object's key (table scene), held and quota."""
+    return [{"unit": unit.index, "object": object_keys[unit.index] if scene == "table" else None,
+             "datapoints": n, "quota": unit.quota}
+            for unit, n in zip(units, held, strict=True) if n < unit.quota]
 
 
 def _earlier_runs(out: Path) -> list[dict[str, Any]]:
@@ -554,7 +570,7 @@ def _assemble_shards(out: Path, units: list[Unit], writer: Any, per_shard: int, 
     decompressed once for all its shards (`_RecentUnits`): a unit of 120,000 datapoints (a small
     set's object) spans 120 shards, and reading it whole for each made assembly quadratic in the
     unit's size. The shards are the same bytes for any thread count; memory holds at most
-    `threads` + 1 units.
+    `threads` + 1 units. The returned ``unit_datapoints`` are what each unit holds, in order.
     """
     counts, positives, image_ids, object_ids = [], 0, [], []
     for unit in units:
@@ -589,4 +605,5 @@ def _assemble_shards(out: Path, units: list[Unit], writer: Any, per_shard: int, 
         "datapoints": total, "shards": shards, "positive_rate": round(positives / total, 4) if total else 0.0,
         "image_ids": np.concatenate(image_ids) if image_ids else np.zeros(0, np.int32),
         "object_ids": np.concatenate(object_ids) if object_ids else np.zeros(0, np.int32),
+        "unit_datapoints": counts,
     }

@@ -131,14 +131,15 @@ def generate(
 
 
 def short_dataset_note(card: dict[str, Any], requested: int, max_images: int) -> str:
-    """The note a dataset smaller than asked gets: how much, which objects stopped short, the remedy."""
+    """The note a dataset smaller than asked gets: how much, which units stopped short, the remedy."""
     short = card.get("short_units", [])
     names = ", ".join(f"{u['object'] or 'bin ' + str(u['unit'])} {u['datapoints']:,} of {u['quota']:,}"
-                      for u in short[:5])
-    more = f" and {len(short) - 5} more" if len(short) > 5 else ""
-    return (f"the dataset holds {card['datapoints']:,} of the {requested:,} datapoints asked for: {len(short)} "
-            f"object(s) stopped at --max-images-per-object {max_images} short of their share ({names}{more}); "
-            f"raise it, or --grasps-per-image, for more")
+                      for u in short[:5]) + (f" and {len(short) - 5} more" if len(short) > 5 else "")
+    head = f"the dataset holds {card['datapoints']:,} of the {requested:,} datapoints asked for: "
+    if card.get("config", {}).get("scene") == "bin":
+        return head + f"{len(short)} bin(s) showed fewer visible grasps than their share ({names})"
+    return (head + f"{len(short)} object(s) stopped at --max-images-per-object {max_images} short of their "
+            f"share ({names}); raise it, or --grasps-per-image, for more")
 
 
 @dataset_app.command("show")

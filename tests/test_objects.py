@@ -115,8 +115,6 @@ def test_import_good_mesh_in_millimetres(tmp_path):
 
 
 def _bad_meshes(tmp_path):
-    two = trimesh.util.concatenate([trimesh.creation.box(extents=(0.03,) * 3),
-                                    trimesh.creation.box(extents=(0.03,) * 3).apply_translation([0.1, 0, 0])])
     half_sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.04)
     half_sphere.update_faces(half_sphere.triangles_center[:, 2] > 0)
     flat = trimesh.Trimesh([[0, 0, 0], [0.05, 0, 0], [0, 0.05, 0], [0.05, 0.05, 0]], [[0, 1, 2], [1, 3, 2]])
@@ -127,11 +125,36 @@ def _bad_meshes(tmp_path):
         "missing": (tmp_path / "missing.stl", "not found"),
         "unsupported": (tmp_path / "notes.txt", "unsupported"),
         "nan": (tmp_path / "nan.obj", "NaN"),
-        "disconnected": (write(two, tmp_path / "two.stl"), "disconnected"),
         "unrepairable": (write(half_sphere, tmp_path / "half.ply"), "watertight"),
         "flat": (write(flat, tmp_path / "flat.obj"), "degenerate"),
         "huge": (write(trimesh.creation.box(extents=(3.0, 1.0, 1.0)), tmp_path / "huge.stl"), "absurd scale"),
     }
+
+
+def test_separate_pieces_import_as_one_rigid_body_with_the_assemblys_mass_properties(tmp_path):
+    # Two 30 mm cubes, centres 0.1 m apart on x, 0.2 kg in all: a rigid assembly (a link's two
+    # parts, fastened by what the mesh does not draw). Each cube m = 0.1 kg, side a = 0.03 m.
+    # Centre of mass: midway, x = 0.05 m, by symmetry. Inertia about it: a cube's own m a^2 / 6
+    # = 1.5e-5 kg m^2 about any axis through its centre; about y and z the parallel-axis term
+    # m d^2 with d = 0.05 m adds 2.5e-4 per cube: Iyy = Izz = 2 (1.5e-5 + 2.5e-4) = 5.3e-4,
+    # Ixx = 2 x 1.5e-5 = 3e-5 (the cubes' centres lie on x), no products.
+    cube = trimesh.creation.box(extents=(0.03,) * 3)
+    two = write(trimesh.util.concatenate([cube, cube.copy().apply_translation([0.1, 0, 0])]), tmp_path / "two.stl")
+    record = import_mesh(two, set_name="custom", name="two", mass=0.2, root=tmp_path / "objs")
+    assert record.params["warnings"][0].startswith("2 separate pieces (the nearest 70 mm from the largest")
+    assert record.mass == pytest.approx(0.2) and record.volume == pytest.approx(2 * 0.03**3, rel=1e-6)
+    assert record.com == pytest.approx([0.05, 0.0, 0.0], abs=1e-7)  # STL stores float32
+    assert np.asarray(record.inertia) == pytest.approx(np.diag([3e-5, 5.3e-4, 5.3e-4]), rel=1e-5, abs=1e-10)
+    assert len(record.mesh().split(only_watertight=False)) == 2
+    # the convex parts cover both pieces and bridge no gap: no part spans the 40 mm between them
+    sides = {bool(part.centroid[0] > 0.05) for part in record.part_meshes()}
+    assert sides == {False, True}
+    assert all(np.ptp(part.vertices[:, 0]) <= 0.03 + 1e-6 for part in record.part_meshes())
+    # one MuJoCo body: it rests in its most probable stable pose like any object
+    from suctionbench.objects.mjcf import rest_on_plane
+
+    rest = rest_on_plane(record, seconds=1.0)
+    assert rest["finite"] and rest["displacement"] < 0.003 and rest["rotation"] < np.radians(3.0), rest
 
 
 def test_import_bad_meshes_fail_cleanly(tmp_path):

@@ -11,7 +11,8 @@ scales (which import cannot take), counts once as written.
 Groups (--groups, comma-separated):
   synthetic  the repairable meshes of tests/test_import.py's corpus that need no option (textured
              OBJ/GLB seams, touching and overlapping pieces, non-manifold edges, duplicated faces,
-             a stray open sleeve, a small hole): 12 meshes
+             a stray open sleeve, a small hole, two pieces apart kept as one rigid body, a millimetre
+             STL without --units): 14 meshes
   dm_control dm_control's Kinova arm (10 STL) and every 12th dog bone of 1 cm or more (14 STL)
   pybullet   pybullet's pybullet_data (`pip install pybullet==3.2.7`): every OBJ/STL in it but
              the scenes (planes, terrain, a monastery, a stadium, a cloth sheet) and byte-identical

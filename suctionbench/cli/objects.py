@@ -158,7 +158,8 @@ def objects_import(
     as_json: JsonOpt = False,
 ) -> None:
     """Import your own mesh: read, scale, make one closed solid (seams merged, pieces united, small
-    holes closed; each defect it cannot repair named), decompose, compute stable poses."""
+    holes closed; pieces apart kept as one rigid body, with a warning; each defect it cannot repair
+    named), decompose, compute stable poses."""
 
     def body() -> dict[str, Any]:
         from suctionbench.objects.importer import import_mesh, import_target

@@ -143,14 +143,15 @@ def geometry_hash(mesh: trimesh.Trimesh) -> str:
     return digest.hexdigest()[:32]
 
 
-def prepare_mesh(mesh: trimesh.Trimesh, source: str) -> trimesh.Trimesh:
-    """Validate, decimate if large, and insist on one closed body (what simulation needs)."""
+def prepare_mesh(mesh: trimesh.Trimesh, source: str, assembly: bool = False) -> trimesh.Trimesh:
+    """Validate, decimate if large, and insist on one closed body (what simulation needs), or with
+    `assembly` on closed bodies (separate pieces of one rigid body: `objects.repair`, ASSEMBLY)."""
     info = validate_mesh(mesh, source=source)
     mesh = info.mesh
     if not info.watertight:
         raise InputError(f"mesh '{source}': not watertight (has holes or inconsistent faces)")
     bodies = mesh.split(only_watertight=False)
-    if len(bodies) > 1:
+    if len(bodies) > 1 and not assembly:
         raise InputError(f"mesh '{source}': {len(bodies)} disconnected bodies, expected one")
     if len(mesh.faces) > MAX_FACES:
         reduced = mesh.simplify_quadric_decimation(face_count=MAX_FACES)
@@ -263,6 +264,7 @@ def build_object(
     reuse_parts: bool = False,
     cavities: trimesh.Trimesh | None = None,
     keep_above_cap: bool = False,
+    assembly: bool = False,
 ) -> ObjectRecord:
     """Build an object directory at `out_dir` (replaced atomically) and return its record.
 
@@ -281,10 +283,11 @@ def build_object(
     mass, centre of mass and inertia are the material's (mesh and cavities together), the volume and
     density the material's; surface, stable poses' hull and convex parts are the mesh's.
     `keep_above_cap`: keep a mass above the default cup's cap (`object_mass`), named in the record's
-    ``params["warnings"]``, instead of refusing it."""
+    ``params["warnings"]``, instead of refusing it. `assembly`: the mesh may be several closed
+    bodies, separate pieces of one rigid body (`objects.repair`, ASSEMBLY)."""
     out_dir = Path(out_dir)
     check_replaceable_objects([out_dir])  # before the work: minutes of CoACD for nothing otherwise
-    mesh = prepare_mesh(mesh, source=source if source != "generated" else spec.name)
+    mesh = prepare_mesh(mesh, source=source if source != "generated" else spec.name, assembly=assembly)
     material = mesh if cavities is None else trimesh.util.concatenate([mesh, cavities])
     model, props = object_mass(material, spec, mass, keep_above_cap=keep_above_cap)
     params = spec.params

@@ -1,5 +1,6 @@
 """Import a user's own mesh (OBJ / STL / PLY / GLB ...) as an object: read, scale, validate, make
-one closed solid (see `suctionbench.objects.repair`), decompose, compute stable poses."""
+one closed solid, or separate closed pieces of one rigid body (see `suctionbench.objects.repair`),
+decompose, compute stable poses."""
 
 from __future__ import annotations
 
@@ -54,7 +55,8 @@ def import_mesh(
     The file is read as written, scaled to metres (`units` times `scale`; "auto" reads an STL in
     metres or millimetres, whichever size is plausible: `geometry.mesh.AUTO_UNITS`), validated, made one
     closed solid (`suctionbench.objects.repair.solidify`: seams merged, duplicated faces removed,
-    touching or overlapping pieces united, small holes closed, stray open sheets dropped), then
+    touching or overlapping pieces united, small holes closed, stray open sheets dropped; pieces
+    further apart kept as one rigid body, named in ``params["warnings"]``), then
     built (mass, stable poses, convex parts). What was repaired is kept in the record's
     ``params["repairs"]``. An object heavier than the default cup carries is imported all the same
     (a lighter print variant where one fits, else the lightest; a given `mass` as given), named in
@@ -69,6 +71,8 @@ def import_mesh(
     if solid.notes and not try_repair:
         raise InputError(f"mesh '{path}': needs repair ({solid.notes[0]}) and repairs are off (--no-repair)")
     params = {"units": info.units, "scale": float(scale), "repairs": solid.notes}
+    if solid.warnings:
+        params["warnings"] = list(solid.warnings)
     spec = ObjectSpec(name=name, set=set_name, generator="import", params=params, description=f"imported from {path}")
     return build_object(
         solid.mesh,
@@ -82,4 +86,5 @@ def import_mesh(
         coacd_parallel=coacd_parallel or len(os.sched_getaffinity(0)),
         cavities=solid.cavities,
         keep_above_cap=True,
+        assembly=True,  # solidify leaves one body, or separate pieces it warns of
     )

@@ -29,7 +29,11 @@ undoes the usual disguises, in this order, and says what it did:
    assemblies drawn clearances) are snapped across it and united; sealed voids the union encloses
    between overlapping pieces are filled up to LOOSE_MAX of the volume (more is kept hollow, as the
    pieces leave it, like a cavity modelled facing inwards); loose crumbs of at most LOOSE_MAX of the
-   volume are dropped; anything else apart is a second object, rejected with the distance to it.
+   volume are dropped. Pieces further apart that hold more are kept, apart, as one rigid body
+   (ASSEMBLY), with a warning: a mesh file is one object as its author meant it, and a robot link's
+   parts (a board on its standoffs, a bicycle's pedal parts) are fastened by screws and brackets its
+   mesh does not draw, one rigid body in MuJoCo, Drake or pybullet as here; a cup sealing on one
+   piece lifts them all.
 7. *Cracks.* Render meshes are often patches that do not meet (cracks and T-junctions between
    them, no shared vertices), or solids with a face the exporter left out. Where steps 3-4 leave
    no closed body, or too much open surface to drop, the solid the surface bounds is rebuilt from
@@ -112,6 +116,9 @@ class Solid:
     mesh: trimesh.Trimesh
     notes: list[str] = field(default_factory=list)
     """One line per repair (what was wrong and what was done)."""
+    warnings: list[str] = field(default_factory=list)
+    """What the user should know about the solid that is not a repair (it is kept as a rigid
+    assembly of separate pieces, say)."""
     cavities: trimesh.Trimesh | None = None
     """Sealed cavities inside `mesh` as the mesh modelled them (closed surfaces facing inwards, so
     their volume is negative), or None. The object's surface, collision and grasps are `mesh`'s;
@@ -342,7 +349,7 @@ def solidify(mesh: trimesh.Trimesh, source: str, rebuild: bool = True) -> Solid:
                     note = (f"{what} (patches that do not meet): rebuilt as the solid the surface bounds "
                             f"(generalised winding number, {WINDING_GRID} cells across; {ambiguous:.1%} of the "
                             f"volume ambiguous)")
-                    return Solid(solid.mesh, [note, *solid.notes], solid.cavities)
+                    return Solid(solid.mesh, [note, *solid.notes], solid.warnings, solid.cavities)
         if not closed:
             body, holes, widest = max(open_parts, key=lambda p: p[0].area)
             if cut and not holes:
@@ -544,6 +551,7 @@ def _unite(closed: list[trimesh.Trimesh], notes: list[str], tag: str) -> Solid:
     an InputError."""
     summed = sum(_volume(b) for b in closed)
     pieces = _pieces(_union(closed, tag))
+    merged = len(pieces) < len(closed)  # some touched or overlapped
     if not pieces:
         raise InputError(f"{tag}: its closed bodies unite into nothing (degenerate)")
     size = max(float(np.ptp(np.vstack([p.vertices for p in pieces]), axis=0).max()), 1e-12)
@@ -573,20 +581,18 @@ def _unite(closed: list[trimesh.Trimesh], notes: list[str], tag: str) -> Solid:
                 united = _pieces(_union(members, tag))
                 joined.extend(united)
             pieces = sorted(joined, key=_volume, reverse=True)
-    loose = []
+    loose, warnings = [], []
     if len(pieces) > 1:
         total = sum(_volume(p) for p in pieces)
-        loose = pieces[1:]
-        share = sum(_volume(p) for p in loose) / total
-        if share > LOOSE_MAX:
-            apart = min(gap(pieces[0], p, np.inf) for p in loose) * 1000
-            raise InputError(
-                f"{tag}: {len(pieces)} disconnected bodies (pieces that neither touch nor overlap, the nearest "
-                f"{apart:.3g} mm apart, beyond the {tolerance * 1000:.2g} mm a made part this size can close), "
-                "expected one"
-            )
-        pieces = pieces[:1]
-    united, voids = _fill_voids(pieces[0], notes)
+        share = sum(_volume(p) for p in pieces[1:]) / total
+        if share <= LOOSE_MAX:
+            loose, pieces = pieces[1:], pieces[:1]
+        else:
+            warnings.append(_assembly_warning(pieces, tolerance))
+    filled = [_fill_voids(p, notes) for p in pieces]
+    united = trimesh.util.concatenate([f for f, _ in filled]) if len(filled) > 1 else filled[0][0]
+    hollow = [v for _, v in filled if v is not None]
+    voids = trimesh.util.concatenate(hollow) if len(hollow) > 1 else (hollow[0] if hollow else None)
     if gaps:
         notes.append(
             f"{_count(len(gaps), 'gap')} of up to {max(gaps) * 1000:.2g} mm between pieces closed "
@@ -598,15 +604,27 @@ def _unite(closed: list[trimesh.Trimesh], notes: list[str], tag: str) -> Solid:
             f"{len(closed)} pieces overlap: united (volume {united.volume * 1e6:.4g} cm^3 instead of "
             f"{summed * 1e6:.4g} cm^3 counted twice)"
         )
-    elif not gaps:
-        notes.append(f"{len(closed)} pieces that touch face to face united into one body")
+    elif merged and not gaps:
+        into = "one body" if len(pieces) == 1 else f"{len(pieces)} bodies"
+        notes.append(f"{len(closed)} pieces that touch face to face united into {into}")
     if loose:
         dropped = sum(_volume(p) for p in loose)
         notes.append(
             f"{_count(len(loose), 'loose piece')} dropped ({dropped / (_volume(united) + dropped):.2%} "
             f"of the volume, apart from the body: crumbs, not part of the object)"
         )
-    return Solid(unpinch(united), notes, voids)
+    return Solid(unpinch(united), notes, warnings, voids)
+
+
+def _assembly_warning(pieces: list[trimesh.Trimesh], tolerance: float) -> str:
+    """The warning for pieces kept apart as one rigid body (ASSEMBLY in the module docstring)."""
+    apart = min(gap(pieces[0], p, np.inf) for p in pieces[1:])
+    return (
+        f"{len(pieces)} separate pieces (the nearest {apart * 1000:.3g} mm from the largest, beyond the "
+        f"{tolerance * 1000:.2g} mm a made part this size closes) kept as one rigid body, as a robot link's parts "
+        "are fastened by what its mesh does not draw: a grasp on one lifts them all; to import them as separate "
+        "objects, split the file"
+    )
 
 
 def _count(n: int | list | None, singular: str, plural: str | None = None) -> str:

@@ -15,6 +15,17 @@ from suctionbench.config import LabelConfig, PerturbationConfig
 from suctionbench.errors import InputError
 
 
+def cpu_model() -> str:
+    """The CPU's model name as the kernel reports it ("unknown" where it does not): timings depend on
+    it, so every timing result names it (the same 2-core command took 0.050 s on one host's cores
+    and 0.024 s on another's)."""
+    try:
+        with open("/proc/cpuinfo") as fh:
+            return next((line.split(":", 1)[1].strip() for line in fh if line.startswith("model name")), "unknown")
+    except OSError:
+        return "unknown"
+
+
 def _limit_cores(cores: int) -> int:
     """Pin this process to the first `cores` CPUs (0 = leave as is); returns the count in use.
 
@@ -284,7 +295,7 @@ def bench_plan(*, policies: list[str], model: str | None, scenes: int, seed: int
         runner = PickRunner(PickRequest(record.key, seed=seed + i, record=record))
         runner.reset()
         observations.append(runner.observe())
-    result: dict[str, Any] = {"scenes": len(observations), "cores": used_cores}
+    result: dict[str, Any] = {"scenes": len(observations), "cores": used_cores, "cpu": cpu_model()}
     for name in policies:
         policy = make_policy(name, **({"model": model} if name in MODEL_POLICIES and model else {}))
         result[f"{name}_s_per_grasp"] = _seconds_per_grasp(policy, observations, seed)

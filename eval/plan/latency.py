@@ -11,6 +11,7 @@ machine's other load is not controlled, so read the figures as indicative.
 
 import argparse
 import json
+import os
 import platform
 import statistics
 import time
@@ -21,6 +22,7 @@ import sklearn.linear_model  # noqa: F401  (imported before timing: the CLI pays
 import torch  # noqa: F401
 
 from suctionbench.allocator import keep_large_blocks
+from suctionbench.bench import cpu_model
 from suctionbench.planning import plan_grasp, read_depth
 
 IMAGE = Path(__file__).resolve().parents[2] / "examples" / "scene_mug.png"
@@ -45,7 +47,8 @@ def main(repeats: int) -> None:
     rows = [measure(p, depth, repeats) for p in ("random", "centroid", "planarity-centroid", "gqcnn", "fc-gqcnn")]
     print(json.dumps({"image": f"{IMAGE.name} {depth.shape[1]} x {depth.shape[0]}", "repeats": repeats,
                       "machine": f"{platform.machine()}, {platform.python_implementation()} "
-                                 f"{platform.python_version()}", "rows": rows}, indent=1))
+                                 f"{platform.python_version()}", "cpu": cpu_model(),
+                      "cores": len(os.sched_getaffinity(0)), "rows": rows}, indent=1))
 
 
 if __name__ == "__main__":

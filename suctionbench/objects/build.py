@@ -150,9 +150,10 @@ def prepare_mesh(mesh: trimesh.Trimesh, source: str, assembly: bool = False) -> 
     mesh = info.mesh
     if not info.watertight:
         raise InputError(f"mesh '{source}': not watertight (has holes or inconsistent faces)")
-    bodies = mesh.split(only_watertight=False)
-    if len(bodies) > 1 and not assembly:
-        raise InputError(f"mesh '{source}': {len(bodies)} disconnected bodies, expected one")
+    if not assembly:  # an assembly's pieces are its own (solidify counted them): no split to pay for
+        bodies = mesh.split(only_watertight=False)
+        if len(bodies) > 1:
+            raise InputError(f"mesh '{source}': {len(bodies)} disconnected bodies, expected one")
     if len(mesh.faces) > MAX_FACES:
         reduced = mesh.simplify_quadric_decimation(face_count=MAX_FACES)
         if reduced.is_watertight and reduced.is_winding_consistent and reduced.volume > 0:

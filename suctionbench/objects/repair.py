@@ -592,7 +592,7 @@ def _unite(closed: list[trimesh.Trimesh], notes: list[str], tag: str) -> Solid:
     filled = [_fill_voids(p, notes) for p in pieces]
     united = trimesh.util.concatenate([f for f, _ in filled]) if len(filled) > 1 else filled[0][0]
     hollow = [v for _, v in filled if v is not None]
-    voids = trimesh.util.concatenate(hollow) if len(hollow) > 1 else (hollow[0] if hollow else None)
+    voids = trimesh.util.concatenate(hollow) if hollow else None
     if gaps:
         notes.append(
             f"{_count(len(gaps), 'gap')} of up to {max(gaps) * 1000:.2g} mm between pieces closed "

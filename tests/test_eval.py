@@ -16,8 +16,8 @@ from suctionbench.policies.gqcnn import DEFAULT_MODEL
 from suctionbench.runlog.reader import read_run
 from suctionbench.sim.episode_config import FAILURES
 
-POLICIES = ["random", "centroid", "planarity", "planarity-centroid", "gqcnn", "fc-gqcnn", "gqcnn-adv", "analytic",
-            "random-surface"]
+POLICIES = ["random", "centroid", "planarity", "planarity-centroid", "gqcnn", "fc-gqcnn", "gqcnn-adv", "fc-gqcnn-adv",
+            "analytic", "random-surface"]
 """Every built-in policy: CI's one real pick each (`test_smoke_list_covers_every_policy` keeps it complete)."""
 
 
@@ -87,6 +87,7 @@ def test_one_real_pick_per_policy(policy):
         (["--policy", "centroid", "--task", "no_such_task"], "no_such_task"),
         (["--policy", "gqcnn", "--set", "basic", "--model", "/no/such/model"], "model"),
         (["--policy", "gqcnn-adv", "--set", "basic", "--model", "assets/models/gqcnn-context"], "reads no model"),
+        (["--policy", "fc-gqcnn-adv", "--set", "basic", "--model", "assets/models/gqcnn-context"], "reads no model"),
         (["--policy", "planarity", "--set", "basic", "--model", "assets/models/gqcnn-context"], "reads no model"),
         (["--policy", "centroid"], "--set"),
         (["--policy", "centroid", "--set", "basic", "--engine", "spark"], "spark"),

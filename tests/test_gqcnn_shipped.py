@@ -3,6 +3,8 @@ scenes, and a simulated pick with it."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from test_policies import OBJECTS, Scene
@@ -54,11 +56,13 @@ def test_adversarial_model_is_trained_on_the_adversarial_objects_only():
     # (the policy is then run on those same objects, as in the paper)
     card = load_model(asset_path(*ADV_MODEL)).card
     assert card["dataset"]["objects"] == 5 and card["training"]["config"]["split"] == "image_wise"
-    policy = make_policy("gqcnn-adv")
     scene = Scene("adversarial/narrow_gear")
-    action = policy.plan(scene.observation(mask=scene.mask), np.random.default_rng(0))
-    u, v = np.round(action.pixel).astype(int)
-    assert scene.mask[v, u] and 0 <= action.q <= 1
+    for name in ("gqcnn-adv", "fc-gqcnn-adv"):  # its CEM and its dense policy both plan with it
+        policy = make_policy(name)
+        assert Path(policy.model.path).resolve() == asset_path(*ADV_MODEL).resolve()
+        action = policy.plan(scene.observation(mask=scene.mask), np.random.default_rng(0))
+        u, v = np.round(action.pixel).astype(int)
+        assert scene.mask[v, u] and 0 <= action.q <= 1
 
 
 def test_cem_raises_the_best_predicted_quality_over_its_seeds(policy):

@@ -44,6 +44,7 @@ the dense policy took 0.095 s while still charged 0.04; after the planning-time 
 fc-gqcnn 0.049-0.055 s, charged 0.06 since. For scale, the paper's Dex-Net 3.0 GQ-CNN policy took about 3.0 s per grasp
 on a GeForce 980 desktop."""
 PLANNING_S["gqcnn-adv"] = PLANNING_S["gqcnn"]  # the same CEM policy and network, other weights
+PLANNING_S["fc-gqcnn-adv"] = PLANNING_S["fc-gqcnn"]  # the same dense policy and network, other weights
 
 DEFAULT_PLANNING_S = PLANNING_S["gqcnn"]
 """Planning time of a user or plug-in policy, whose cost the benchmark cannot know: a learned

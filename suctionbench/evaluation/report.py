@@ -36,7 +36,7 @@ __all__ = ["PAPER_KNOWN", "PAPER_RANDOM", "PAPER_RESULTS", "build_report", "expa
            "success_attempt_curve"]
 
 POLICY_ORDER = ("random", "planarity", "centroid", "planarity-centroid", "gqcnn", "fc-gqcnn",
-                "gqcnn-adv")
+                "gqcnn-adv", "fc-gqcnn-adv")
 """Row order of the policies x sets table (the paper's, weakest baseline first)."""
 
 GALLERY_PER_RUN = 6

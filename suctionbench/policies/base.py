@@ -180,6 +180,7 @@ POLICIES: dict[str, str] = {
     "gqcnn": "suctionbench.policies.gqcnn:make_gqcnn_policy",
     "gqcnn-adv": "suctionbench.policies.gqcnn:make_gqcnn_adv_policy",
     "fc-gqcnn": "suctionbench.policies.fc_gqcnn:make_fc_gqcnn_policy",
+    "fc-gqcnn-adv": "suctionbench.policies.fc_gqcnn:make_fc_gqcnn_adv_policy",
 }
 """Registered image policies: name -> "module:attribute" of a factory taking keyword arguments.
 Modules are imported on first use (the GQ-CNN policy's model loading pulls in torch)."""

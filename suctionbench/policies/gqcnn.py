@@ -78,7 +78,7 @@ ADV_MODEL = ("models", "gqcnn-adv")
 """Path parts, under assets/, of the model trained only on the adversarial set's objects: the
 paper's "GQ-CNN (ADV)" row, `make_policy("gqcnn-adv")`."""
 
-SHIPPED_MODELS = {"gqcnn": DEFAULT_MODEL, "fc-gqcnn": DEFAULT_MODEL, "gqcnn-adv": ADV_MODEL}
+SHIPPED_MODELS = {"gqcnn": DEFAULT_MODEL, "fc-gqcnn": DEFAULT_MODEL, "gqcnn-adv": ADV_MODEL, "fc-gqcnn-adv": ADV_MODEL}
 """The shipped model each built-in GQ-CNN policy loads when given none."""
 
 
@@ -475,7 +475,13 @@ def make_gqcnn_policy(
 def make_gqcnn_adv_policy(config: CEMConfig | None = None, **overrides: Any) -> GQCNNPolicy:
     """Registry factory for "gqcnn-adv" (Dex-Net 3.0's "GQ-CNN (ADV)"): the CEM policy with the
     shipped model trained only on datapoints of the adversarial set's objects (`ADV_MODEL`)."""
-    return GQCNNPolicy(shipped_model(asset_path(*ADV_MODEL), "adversarial-trained model"), config, **overrides)
+    return GQCNNPolicy(adv_model(), config, **overrides)
+
+
+def adv_model() -> LazyModel:
+    """The shipped GQ-CNN (ADV) model (`ADV_MODEL`), loaded on first use; InputError if it is not
+    installed."""
+    return shipped_model(asset_path(*ADV_MODEL), "adversarial-trained model")
 
 
 def resolve_model(model: GraspQualityModel | str | Path | None) -> GraspQualityModel:

@@ -191,6 +191,9 @@ def test_picks_per_hour_is_deterministic_and_wall_time_reported_beside_it():
     assert compute == {"sensing_s": SENSOR_FRAME_S, "planning_s": PLANNING_S["gqcnn"]}
     assert CYCLE_MODEL.compute_time("/x/p.py:make")["planning_s"] == PLANNING_S["gqcnn"]
     assert CYCLE_MODEL.compute_time("analytic") == {"sensing_s": 0.0, "planning_s": 0.0}
+    # the ADV model's policies run their base policy's search on the same network: its time
+    assert CYCLE_MODEL.compute_time("gqcnn-adv") == compute
+    assert CYCLE_MODEL.compute_time("fc-gqcnn-adv")["planning_s"] == PLANNING_S["fc-gqcnn"]
     fast = [_record(True, 4.0, 0.1, 0.1), _record(False, 5.0, 0.2, 0.3)]
     slow = [_record(True, 4.0, 0.9, 1.7), _record(False, 5.0, 0.5, 2.3)]  # same trials, a busier machine
     a, b = trial_metrics(fast, compute), trial_metrics(slow, compute)

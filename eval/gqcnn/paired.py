@@ -20,14 +20,18 @@ from pathlib import Path
 from suctionbench.runlog.reader import read_run
 
 
-def outcomes(run: Path) -> dict[int, tuple[str, bool]]:
-    """Trial index -> (object, success) of the run's valid trials."""
+def valid_results(run: Path) -> dict[int, dict]:
+    """Trial index -> logged result of the run's valid trials."""
     out = {}
     for record in read_run(run / "trials"):
-        result = record["result"]
-        if result.get("valid", True):
-            out[int(Path(record["path"]).stem.split("_")[-1])] = (result["object"], bool(result["success"]))
+        if record["result"].get("valid", True):
+            out[int(Path(record["path"]).stem.split("_")[-1])] = record["result"]
     return out
+
+
+def outcomes(run: Path) -> dict[int, tuple[str, bool]]:
+    """Trial index -> (object, success) of the run's valid trials."""
+    return {i: (result["object"], bool(result["success"])) for i, result in valid_results(run).items()}
 
 
 def mcnemar_p(only_a: int, only_b: int) -> float:

@@ -16,33 +16,28 @@ from pathlib import Path
 
 import numpy as np
 
-from suctionbench.runlog.reader import read_run
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from paired import valid_results  # noqa: E402
 
-ROBUST = 0.2
-"""The label threshold of the datasets (robust wrench resistance above it: robust)."""
+from suctionbench.learning.data import DEFAULT_LABEL_THRESHOLD  # noqa: E402
 
 
-def chosen(run: Path) -> dict[int, tuple[tuple[str, str], float | None, float]]:
-    """Trial index -> (object and trial seed, the policy's q, the chosen grasp's robust label) of a run."""
-    out = {}
-    for record in read_run(run / "trials"):
-        result = record["result"]
-        trial = int(Path(record["path"]).stem.split("_")[-1])
-        where = (result["object"], str(result.get("seed")))  # the trial seed fixes the placement
-        out[trial] = (where, result.get("policy_q"), float(result.get("label_rwr") or 0.0))
-    return out
+def robust(result: dict) -> bool:
+    """Whether the analytic label calls the chosen grasp robust, as the datasets label it."""
+    return float(result.get("label_rwr") or 0.0) > DEFAULT_LABEL_THRESHOLD
 
 
 def main(pairs: list[tuple[Path, Path]]) -> None:
     rows: dict[str, list[tuple[float, bool, bool]]] = defaultdict(list)
     for run_a, run_b in pairs:
-        a, b = chosen(run_a), chosen(run_b)
+        a, b = valid_results(run_a), valid_results(run_b)
         for trial in sorted(set(a) & set(b)):
-            if a[trial][0] != b[trial][0]:
+            ra, rb = a[trial], b[trial]
+            if (ra["object"], ra.get("seed")) != (rb["object"], rb.get("seed")):  # the seed fixes the placement
                 sys.exit(f"{run_a} and {run_b}: trial {trial} differs (not the same task and seed)")
-            if a[trial][1] is None or b[trial][1] is None:
+            if ra.get("policy_q") is None or rb.get("policy_q") is None:
                 continue
-            rows[a[trial][0][0]].append((b[trial][1] - a[trial][1], a[trial][2] > ROBUST, b[trial][2] > ROBUST))
+            rows[ra["object"]].append((rb["policy_q"] - ra["policy_q"], robust(ra), robust(rb)))
     print("| object | trials | B's q higher % | median q B - A | robust chosen (A, B) |")
     print("|---|---|---|---|---|")
     for name, values in sorted(rows.items()):

@@ -43,8 +43,6 @@ the dense policy took 0.095 s while still charged 0.04; after the planning-time 
 (bench plan, 20 scenes, 12 runs over the work's last steps): gqcnn 0.082-0.103 s (charged 0.1),
 fc-gqcnn 0.049-0.055 s, charged 0.06 since. For scale, the paper's Dex-Net 3.0 GQ-CNN policy took about 3.0 s per grasp
 on a GeForce 980 desktop."""
-PLANNING_S["gqcnn-adv"] = PLANNING_S["gqcnn"]  # the same CEM policy and network, other weights
-PLANNING_S["fc-gqcnn-adv"] = PLANNING_S["fc-gqcnn"]  # the same dense policy and network, other weights
 
 DEFAULT_PLANNING_S = PLANNING_S["gqcnn"]
 """Planning time of a user or plug-in policy, whose cost the benchmark cannot know: a learned
@@ -73,9 +71,11 @@ class CycleModel:
         """{"sensing_s", "planning_s"} of one attempt of `policy` (a registry name or a user spec)."""
         if policy in ("analytic", "random-surface"):
             return {"sensing_s": 0.0, "planning_s": KNOWN_STATE_PLANNING_S}
+        from suctionbench.policies.base import ADV_VARIANTS
         from suctionbench.policies.plugins import builtin_name
 
         name = builtin_name(policy)
+        name = ADV_VARIANTS.get(name, name)  # the same search and network with other weights
         planning = self.planning_s.get(name, self.default_planning_s) if name else self.default_planning_s
         return {"sensing_s": self.sensing_s, "planning_s": planning}
 

@@ -188,6 +188,10 @@ Modules are imported on first use (the GQ-CNN policy's model loading pulls in to
 MODEL_POLICIES = ("gqcnn", "fc-gqcnn")
 """Built-in policies that read a GQ-CNN model (the `model` option, `--model` on the command line)."""
 
+ADV_VARIANTS: dict[str, str] = {"gqcnn-adv": "gqcnn", "fc-gqcnn-adv": "fc-gqcnn"}
+"""Built-in policies that are another built-in's search with the shipped GQ-CNN (ADV) model instead of
+the default: name -> that policy. Only the weights differ, so they share its planning time."""
+
 ALIASES: dict[str, str] = {"gqcnn-cem": "gqcnn"}
 """Other accepted names (DESIGN.md calls the GQ-CNN policy gqcnn-cem)."""
 

@@ -57,7 +57,15 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from suctionbench.errors import InputError
-from suctionbench.policies.base import GraspAction, Observation, SamplerConfig, SceneCloud, configured, scene_cloud
+from suctionbench.policies.base import (
+    ADV_VARIANTS,
+    GraspAction,
+    Observation,
+    SamplerConfig,
+    SceneCloud,
+    configured,
+    scene_cloud,
+)
 from suctionbench.policies.plugins import builtin_name
 from suctionbench.resources import asset_path
 from suctionbench.sensing.object_context import ObjectShape, object_context
@@ -76,9 +84,9 @@ DEFAULT_MODEL = ("models", "gqcnn-sensor48")
 
 ADV_MODEL = ("models", "gqcnn-adv")
 """Path parts, under assets/, of the model trained only on the adversarial set's objects: the
-paper's "GQ-CNN (ADV)" row, `make_policy("gqcnn-adv")`."""
+paper's "GQ-CNN (ADV)" row, `make_policy("gqcnn-adv")` (and the other `ADV_VARIANTS`)."""
 
-SHIPPED_MODELS = {"gqcnn": DEFAULT_MODEL, "fc-gqcnn": DEFAULT_MODEL, "gqcnn-adv": ADV_MODEL, "fc-gqcnn-adv": ADV_MODEL}
+SHIPPED_MODELS = {"gqcnn": DEFAULT_MODEL, "fc-gqcnn": DEFAULT_MODEL, **dict.fromkeys(ADV_VARIANTS, ADV_MODEL)}
 """The shipped model each built-in GQ-CNN policy loads when given none."""
 
 

@@ -13,7 +13,7 @@ import pytest
 from suctionbench.config import CUP_DEFAULT, STANDARD_GRAVITY
 from suctionbench.contact import SuctionLabeller
 from suctionbench.dataset import generate as gen
-from suctionbench.dataset.storage import DatasetReader, dexnet_compatible, read_card, read_split
+from suctionbench.dataset.storage import DatasetReader, dexnet_compatible, held_out_keys, read_card, read_split
 from suctionbench.errors import InputError
 from suctionbench.geometry.sampling import sample_surface_grasps
 from suctionbench.objects.registry import load_object
@@ -179,6 +179,30 @@ def test_different_config_is_refused(reference, tmp_path):
     other = gen.GenerationConfig(datapoints=150, seed=4, grasps_per_object=40, stable_poses=2, datapoints_per_shard=64)
     with pytest.raises(InputError, match="different configuration"):
         gen.generate_dataset(out, [str(r.directory) for r in records], KEYS, "primesense", other, resume=True)
+
+
+def test_holdout_like_holds_out_the_other_datasets_objects(reference, tmp_path):
+    # A second dataset of the same objects (another seed) holds out exactly the reference's held-out
+    # objects, so a model trained on both sees none of them; the card says where they came from.
+    keys = held_out_keys(reference)
+    assert 0 < len(keys) < len(KEYS)
+    records = [load_object(k) for k in KEYS]
+    other = gen.GenerationConfig(datapoints=150, seed=4, grasps_per_object=40, stable_poses=2, datapoints_per_shard=64)
+    out = tmp_path / "second"
+    card = gen.generate_dataset(out, [str(r.directory) for r in records], KEYS, "primesense", other,
+                                holdout_like=reference)
+    assert held_out_keys(out) == keys
+    assert card["holdout_like"]["objects"] == len(keys)
+    assert card["holdout_like"]["fingerprint"] == read_card(reference)["fingerprint"]
+    # another corpus (here: without one of the held-out objects) is refused before anything is written
+    rest = [k for k in KEYS if k != keys[0]]
+    with pytest.raises(InputError, match=r"--holdout-like .*not among --objects"):
+        gen.generate_dataset(tmp_path / "third", [str(load_object(k).directory) for k in rest], rest, "primesense",
+                             other, holdout_like=reference)
+    assert not (tmp_path / "third").exists()
+    with pytest.raises(InputError, match=r"--holdout-like .*not a finished dataset"):
+        gen.generate_dataset(tmp_path / "fourth", [str(r.directory) for r in records], KEYS, "primesense", other,
+                             holdout_like=tmp_path)
 
 
 def test_labels_agree_with_the_labeller(reference):

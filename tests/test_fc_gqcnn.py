@@ -228,3 +228,28 @@ def test_distinct_is_np_unique_with_inverse():
     want_values, want_inverse = np.unique(index, return_inverse=True)
     np.testing.assert_array_equal(values, want_values)
     np.testing.assert_array_equal(inverse, want_inverse)
+
+
+def test_smoothed_ranking_prefers_a_good_region_to_a_lone_spike():
+    # quality_sigma ranks a pixel by its Gaussian-weighted neighbourhood, no-grasp pixels (NaN) as
+    # q = 0: a lone q = 1 among q = 0.1 pixels ranks under the middle of a 9 x 9 patch of q = 0.8
+    # (its smoothed value ~0.1 + 0.9 / (2 pi sigma^2) = 0.14 at sigma 2, the patch's ~0.8 * 0.95),
+    # and the patch's rim ranks under its middle; sigma 0 is the raw map.
+    from suctionbench.errors import InputError
+    from suctionbench.policies.fc_gqcnn import DenseConfig, ranking
+
+    q_map = np.full((40, 60), 0.1, np.float32)
+    q_map[:, 50:] = np.nan  # no grasps there
+    q_map[10, 10] = 1.0
+    q_map[16:25, 30:39] = 0.8
+    rows, cols = np.array([10, 20, 20, 16]), np.array([10, 34, 30, 30])  # spike, middle, rim, corner
+    raw = q_map[rows, cols]
+    assert int(np.argmax(raw)) == 0
+    smooth = ranking(q_map, rows, cols, 2.0)
+    assert int(np.argmax(smooth)) == 1 and smooth[1] > smooth[2] > smooth[3]
+    assert smooth[0] == pytest.approx(0.1 + 0.9 / (2 * math.pi * 4.0), abs=0.01)
+    # next to the no-grasp region a uniform map ranks lower than far from it
+    edge = ranking(np.where(np.isnan(q_map), np.nan, 0.5), np.array([20, 20]), np.array([49, 25]), 2.0)
+    assert edge[0] < edge[1] == pytest.approx(0.5)
+    with pytest.raises(InputError, match="quality_sigma = -1 must be in"):
+        DenseConfig(quality_sigma=-1)

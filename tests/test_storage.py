@@ -427,6 +427,20 @@ def test_splits(tmp_path, data):
     assert not np.array_equal(other["image_wise"]["val"], result["image_wise"]["val"])
 
 
+def test_given_held_out_objects_are_the_object_wise_val_side_and_only_they(tmp_path, data):
+    # A second dataset of a corpus holds out what the first held out: the val side is exactly the
+    # datapoints of the given objects, and the image-wise split is what the seed alone draws.
+    images, objects = data["image_labels"], data["object_labels"]
+    drawn = write_splits(tmp_path / "drawn", images, objects, seed=7)
+    given = np.unique(objects)[::4]
+    result = write_splits(tmp_path / "given", images, objects, seed=7, held_out_objects=given)
+    np.testing.assert_array_equal(result["object_wise"]["val"], np.flatnonzero(np.isin(objects, given)))
+    np.testing.assert_array_equal(result["image_wise"]["val"], drawn["image_wise"]["val"])
+    assert not np.array_equal(result["object_wise"]["val"], drawn["object_wise"]["val"])
+    metadata = json.loads((tmp_path / "given" / "splits" / "object_wise" / "metadata.json").read_text())
+    assert metadata["held_out_like"] is True and metadata["num_groups_val"] == len(given)
+
+
 def test_split_of_few_large_groups_keeps_both_sides(tmp_path):
     groups = np.repeat([0, 1], 50)  # 50/50: no grouping reaches 20 %, but val must not be empty
     result = write_splits(tmp_path, groups, groups, seed=0)

@@ -74,6 +74,9 @@ def generate(
                                                        "grasps on every image too (on-policy data).")] = None,
     proposals_per_image: Annotated[int, typer.Option(help="With --proposals: the policy's best grasps per image "
                                                           "(at least 1 cm apart).")] = 8,
+    holdout_like: Annotated[Path | None, typer.Option(help="Another dataset of the same objects: hold out its "
+                                                          "held-out objects (object-wise split) rather than draw "
+                                                          "new ones, so both can train one model.")] = None,
     resume: Annotated[bool, typer.Option(help="Continue an interrupted run with the same configuration.")] = False,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing dataset.")] = False,
     seed: SeedOpt = 0,
@@ -114,7 +117,7 @@ def generate(
             card = generate_dataset(
                 out, [str(r.directory) for r in records], [r.key for r in records], camera, config,
                 engine=engine, workers=resolve_workers(workers), address=address, resume=resume,
-                overwrite=overwrite, progress=advance,
+                overwrite=overwrite, progress=advance, holdout_like=holdout_like,
             )
         elapsed = time.perf_counter() - start
         summary = {k: card[k] for k in ("datapoints", "shards", "positive_rate", "fingerprint")}

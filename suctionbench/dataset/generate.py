@@ -411,16 +411,27 @@ def run_units(
 def generate_dataset(
     out: Path, object_dirs: list[str], object_keys: list[str], camera: str, config: GenerationConfig, *,
     engine: str = "local", workers: int = 1, address: str | None = None, resume: bool = False,
-    overwrite: bool = False, progress: Callable[[int], None] | None = None,
+    overwrite: bool = False, progress: Callable[[int], None] | None = None, holdout_like: Path | None = None,
 ) -> dict[str, Any]:
     """Generate (or resume) a dataset in `out`; returns its card.
+
+    With `holdout_like` (another dataset of the same objects) the object-wise split holds out that
+    dataset's held-out objects instead of drawing its own (`storage.write_splits`), so the two
+    datasets train one model without leaking a validation object; the card records it.
 
     On resume, finished units are reused after checking them (a corrupt unit is reported and
     generated again) and every shard is rebuilt from the units, so a damaged shard is never
     trusted; problems found in the old shards are reported in the card.
     """
     from suctionbench import __version__
-    from suctionbench.dataset.storage import DatasetReader, DatasetWriter, read_card, write_card, write_splits
+    from suctionbench.dataset.storage import (
+        DatasetReader,
+        DatasetWriter,
+        held_out_keys,
+        read_card,
+        write_card,
+        write_splits,
+    )
     from suctionbench.parallel import check_engine
     from suctionbench.sensing.camera import resolve_camera
 
@@ -439,6 +450,17 @@ def generate_dataset(
         raise InputError(f"--datapoints {config.datapoints}: must be at least 1")
     check_noise_model(config.noise_model)
     out = Path(out)
+    held_out = None
+    if holdout_like is not None:  # read and checked before anything is written
+        if Path(holdout_like).resolve() == out.resolve():
+            raise InputError(f"--holdout-like '{holdout_like}': is --out itself")
+        keys = held_out_keys(holdout_like)
+        index = {key: i for i, key in enumerate(object_keys)}
+        unknown = [key for key in keys if key not in index]
+        if unknown:
+            raise InputError(f"--holdout-like '{holdout_like}': {len(unknown)} of its held-out objects are not among "
+                             f"--objects (e.g. '{unknown[0]}'): not the same corpus")
+        held_out = np.array(sorted(index[key] for key in keys), dtype=np.int64)
     camera_dict = to_dict(resolve_camera(camera))
     fingerprint = config_fingerprint(config, camera_dict, object_keys)
     if out.exists() and any(out.iterdir()):
@@ -494,7 +516,11 @@ def generate_dataset(
     writer = DatasetWriter(out, datapoints_per_shard=config.datapoints_per_shard)
     assemble = time.perf_counter()
     stats = _assemble_shards(out, units, writer, config.datapoints_per_shard, config.label_threshold, max(1, workers))
-    write_splits(out, stats.pop("image_ids"), stats.pop("object_ids"), val_fraction=0.2, seed=config.seed)
+    write_splits(out, stats.pop("image_ids"), stats.pop("object_ids"), val_fraction=0.2, seed=config.seed,
+                 held_out_objects=held_out)
+    if holdout_like is not None:
+        card["holdout_like"] = {"dataset": str(Path(holdout_like).resolve()), "objects": len(held_out),
+                                "fingerprint": read_card(holdout_like).get("fingerprint")}
     stats["short_units"] = short_units(units, stats.pop("unit_datapoints"), object_keys, config.scene)
     this_run["assembly_seconds"] = round(time.perf_counter() - assemble, 1)
     card.update(stats, status="complete", regenerated_corrupt_units=corrupt, rewritten_shard_problems=shard_problems,

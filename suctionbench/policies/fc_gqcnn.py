@@ -96,7 +96,16 @@ class DenseConfig:
     most half the diagonal of that pitch off, and `refine` rescores the best exactly. 3.0: the
     96 px grasp thumbnail's own pitch, so a 48 px model's windows are as dense as a 96 px one's."""
 
+    quality_sigma: float = 0.0
+    """Standard deviation (pixels) of a Gaussian that smooths the quality map before its best pixels
+    are taken, pixels that are no grasp counting as q = 0 (GG-CNN's filtered map, Morrison et al.,
+    RSS 2018): a pixel ranks by its neighbourhood, so a lone spike of q and a grasp at the rim of
+    a good region rank below the middle of one. 0: the raw map."""
+
     def __post_init__(self) -> None:
+        if not (isinstance(self.quality_sigma, int | float) and math.isfinite(self.quality_sigma)
+                and 0.0 <= self.quality_sigma <= 20.0):
+            raise InputError(f"dense policy: quality_sigma = {self.quality_sigma!r} must be in [0, 20] pixels")
         if not (isinstance(self.rotations, int) and self.rotations >= 1):
             raise InputError(f"dense policy: rotations = {self.rotations!r} must be an integer >= 1")
         if not (isinstance(self.refine, int) and self.refine >= 0):
@@ -276,10 +285,11 @@ class FCGQCNNPolicy:
         dense = self.quality(observation, cloud)
         q_map = np.full(cloud.valid.shape, np.nan, dtype=np.float32)
         q_map[dense["rows"], dense["cols"]] = dense["q"]
-        best, q = int(np.argmax(dense["q"])), float(dense["q"].max())
+        rank = ranking(q_map, dense["rows"], dense["cols"], cfg.quality_sigma) if cfg.quality_sigma else dense["q"]
+        best, q = int(np.argmax(rank)), float(dense["q"][int(np.argmax(rank))])
         if cfg.refine:
             count = min(cfg.refine, len(dense["q"]))
-            top = np.argpartition(-dense["q"], count - 1)[:count]
+            top = np.argpartition(-rank, count - 1)[:count]
             exact = self.exact.score(observation, cloud, dense["rows"][top], dense["cols"][top], dense["images"],
                                      dense["shape"])  # the images and object read once per plan
             pick = int(np.argmax(exact["q"]))
@@ -292,6 +302,15 @@ class FCGQCNNPolicy:
             info={"plan_time": time.perf_counter() - start, "relaxed": cloud.relaxed, "chosen": best,
                   "evaluations": len(dense["q"]), "rotations": dense["rotations"], "quality_map": q_map},
         )
+
+
+def ranking(q_map: np.ndarray, rows: np.ndarray, cols: np.ndarray, sigma: float) -> np.ndarray:
+    """What the grasps at (rows, cols) rank by: the quality map (H, W; NaN where no grasp) smoothed by
+    a Gaussian of `sigma` pixels, no-grasp pixels counting as q = 0 (`DenseConfig.quality_sigma`)."""
+    from scipy import ndimage
+
+    smooth = ndimage.gaussian_filter(np.nan_to_num(q_map.astype(np.float64), nan=0.0), sigma, mode="constant")
+    return smooth[rows, cols]
 
 
 def make_fc_gqcnn_policy(model: Any | str | Path | None = None, config: DenseConfig | None = None,

@@ -44,6 +44,7 @@ This package re-exports their public names (and the private ones other modules i
 
 from suctionbench.dataset.storage.card import (
     dexnet_compatible,
+    held_out_keys,
     read_card,
     read_split,
     write_card,
@@ -99,6 +100,7 @@ __all__ = [
     "_npz_bytes",
     "dexnet_compatible",
     "gqcnn_field_config",
+    "held_out_keys",
     "is_field_config",
     "manifest_name",
     "read_card",

@@ -112,13 +112,16 @@ def _group_split(groups: np.ndarray, val_fraction: float, rng: np.random.Generat
 
 def write_splits(
     directory: str | Path, image_ids: Any, object_ids: Any, val_fraction: float = 0.2, *,
-    seed: int | np.random.Generator,
+    seed: int | np.random.Generator, held_out_objects: Any = None,
 ) -> dict[str, dict[str, np.ndarray]]:
     """Write image-wise and object-wise train/val splits of datapoint indices; returns them.
 
     ``image_ids[i]`` and ``object_ids[i]`` belong to global datapoint ``i``. Image-wise keeps all
     datapoints of an image on one side (val images are drawn at random from `seed`); object-wise
-    does the same per object, so validation measures generalisation to unseen objects. Files:
+    does the same per object, so validation measures generalisation to unseen objects. With
+    `held_out_objects` (object ids) those objects, and only those, are object-wise val, whatever
+    `seed` would draw: a second dataset of a corpus then holds out what the first held out
+    (`generate --holdout-like`), and a model trained on both has seen no held-out object. Files:
     ``splits/<kind>/{train,val}_indices.npz`` (sorted int64, key ``arr_0``) and ``metadata.json``,
     the layout ``autolab_core.TensorDataset.split`` reads.
     """
@@ -136,7 +139,10 @@ def write_splits(
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     result: dict[str, dict[str, np.ndarray]] = {}
     for kind, groups in (("image_wise", images), ("object_wise", objects)):
-        val = _group_split(groups, float(val_fraction), rng)
+        if kind == "object_wise" and held_out_objects is not None:
+            val = np.isin(groups, np.asarray(held_out_objects))
+        else:
+            val = _group_split(groups, float(val_fraction), rng)
         parts = {"train": np.flatnonzero(~val).astype(np.int64), "val": np.flatnonzero(val).astype(np.int64)}
         split_dir = Path(directory) / SPLIT_DIR / kind
         for part, indices in parts.items():
@@ -148,6 +154,8 @@ def write_splits(
             "num_groups_train": len(np.unique(groups[~val])), "num_groups_val": len(np.unique(groups[val])),
             "seed": int(seed) if isinstance(seed, int | np.integer) else None,
         }
+        if kind == "object_wise" and held_out_objects is not None:
+            metadata["held_out_like"] = True  # the val objects were given (`held_out_objects`), not drawn
         _write_bytes(split_dir / "metadata.json", _json_bytes(metadata, f"split metadata '{split_dir}'"))
         result[kind] = parts
     return result
@@ -165,6 +173,27 @@ def read_split(directory: str | Path, kind: str, part: str) -> np.ndarray:
     if arr.ndim != 1 or arr.dtype.kind not in "iu":
         raise InputError(f"split file '{path}': expected 1-D integer indices, got {arr.dtype}{arr.shape}")
     return arr
+
+
+def held_out_keys(directory: str | Path, what: str = "--holdout-like") -> list[str]:
+    """The keys of the objects a dataset holds out (its object-wise val side), sorted; InputError
+    naming `what` if `directory` is no finished dataset with an object-wise split."""
+    from suctionbench.dataset.storage.reader import DatasetReader
+
+    try:
+        objects = read_card(directory).get("objects")
+        val = read_split(directory, "object_wise", "val")
+        labels = DatasetReader(directory).field("object_labels", verify=False)
+    except InputError as exc:
+        raise InputError(f"{what} '{directory}': not a finished dataset ({exc})") from None
+    if not isinstance(objects, list) or not objects:
+        raise InputError(f"{what} '{directory}': its card lists no objects")
+    if len(val) == 0 or int(val.max()) >= len(labels):
+        raise InputError(f"{what} '{directory}': its object-wise split does not match its {len(labels)} datapoints")
+    ids = np.unique(labels[val])
+    if int(ids.max()) >= len(objects):
+        raise InputError(f"{what} '{directory}': object ids beyond its card's {len(objects)} objects")
+    return sorted(str(objects[i]) for i in ids)
 
 
 # -- gqcnn compatibility ---------------------------------------------------------------------------

@@ -51,13 +51,14 @@ def test_report_from_a_smoke_run(smoke_report):
     np.testing.assert_allclose(rate, [1.0, 0.5, 1 / 3])
 
 
-def _synthetic_run(path: Path, policy: str, metric: str, results: list[dict]) -> Path:
+def _synthetic_run(path: Path, policy: str, metric: str, results: list[dict], seed: int = 0,
+                   task_name: str = "known_objects") -> Path:
     """A run directory as `eval` writes it, with only result records in its logs."""
     (path / "trials").mkdir(parents=True)
-    task = {"name": "known_objects", "set": "adversarial", "trials": len(results), "placement": "stable",
-            "seed": 0, "stable_poses": 3, "metrics": ["pc3d", "ss", "wr", "rwr"], "description": ""}
+    task = {"name": task_name, "set": "adversarial", "trials": len(results), "placement": "stable",
+            "seed": seed, "stable_poses": 3, "metrics": ["pc3d", "ss", "wr", "rwr"], "description": ""}
     (path / "run.json").write_text(json.dumps({"task": task, "policy": policy, "model": None, "metric": metric,
-                                               "cup": "default", "trials": len(results), "seed": 0}))
+                                               "cup": "default", "trials": len(results), "seed": seed}))
     for i, result in enumerate(results):
         record = {"object": f"adversarial/obj{i % 3}", "valid": True, "failure": None if result["success"] else
                   "no_seal", "label_rwr": 0.0, "sim_time": 4.0, "plan_time": 0.5, "sensing_time": 0.0, **result}
@@ -89,6 +90,28 @@ def test_known_objects_tables_from_logs(tmp_path):
     assert rows["pc3d"]["Spearman"] == pytest.approx(-np.sqrt(0.8), abs=1e-3)
     assert rows["ss"]["paper AP / acc. % / Spearman"] == "75 / 74 / 0.49"
     assert "Known objects: random-grasp classification" in (tmp_path / "report" / "report.md").read_text()
+
+
+def test_runs_of_several_seeds_are_pooled(tmp_path):
+    # Seed 0: q ranks successes 1st, 2nd and 4th -> step-wise AP (1 + 1 + 3/4) / 3 = 0.9167, 3/4
+    # successes; seed 1: the one success ranked 2nd -> AP 1/2, 1/4. Pooled: 4 of 8 = 50 %, binomial
+    # standard error sqrt(0.5 * 0.5 / 8) = 17.7 points, mean AP 70.8 %; each object's trials add up
+    # over the seeds (obj0: trials 0 and 3 of each run, 2/2 and 0/2 -> 2/4).
+    runs = [_synthetic_run(tmp_path / f"centroid_s{seed}", "centroid", "rwr",
+                           [{"success": s, "policy_q": q} for s, q in trials], seed=seed, task_name="adversarial")
+            for seed, trials in ((0, ((True, 0.9), (True, 0.8), (False, 0.7), (True, 0.6))),
+                                 (1, ((False, 0.9), (True, 0.8), (False, 0.1), (False, 0.2))))]
+    report = build_report(runs, tmp_path / "report")
+    assert [r["policy"] for r in report["rows"]] == ["centroid [seed 0]", "centroid [seed 1]"]
+    assert [r["AP %"] for r in report["rows"]] == [91.7, 50.0]
+    assert report["tables"]["Novel objects: pooled over seeds"] == [
+        {"policy": "centroid", "set": "adversarial", "seeds": "0, 1", "trials": 8, "success %": 50.0,
+         "+- se (points)": 17.7, "per seed": "3/4, 1/4", "mean AP %": 70.8}]
+    assert "centroid / adversarial: 2/4" in (tmp_path / "report" / "report.md").read_text()
+    # one seed's report has no pooled table and no seed marks
+    single = build_report(runs[:1], tmp_path / "single")
+    assert "Novel objects: pooled over seeds" not in single["tables"]
+    assert single["rows"][0]["policy"] == "centroid"
 
 
 def test_report_bad_input(tmp_path):

@@ -128,10 +128,12 @@ def _tables(summaries: list[dict[str, Any]]) -> list[Table]:
                    "planning time, suctionbench.evaluation.cycle), so the same seeds give the same figure. "
                    "Measured wall times of this run (rendering the noisy depth image, planning) and the "
                    "picks per hour they would give are reported beside it; they vary with the machine's load.")
+    seeded = _seeded(summaries)
     for s in summaries:
         label = s["label"]
         success = _percent(s["success_rate"])
         mark = "" if s.get("complete", True) else f" (incomplete {s['trials']}/{s['expected_trials']})"
+        mark += seeded(s)
         if s["policy"] == "analytic":
             paper = PAPER_KNOWN.get(s["metric"]) if s["set"] == "adversarial" else None
             known.rows.append({"metric": s["metric"] + mark, "set": s["set"], "trials": s["trials"],
@@ -155,15 +157,62 @@ def _tables(summaries: list[dict[str, Any]]) -> list[Table]:
                                "picks/hour": s["picks_per_hour"],
                                "paper success (AP) %": f"{paper[0]} ({paper[1]})" if paper else "-",
                                "success - paper (points)": _delta(success, paper and paper[0])})
-        timing.rows.append({"run": f"{label} / {s['set']}", "motion s": s["mean_motion_s"],
+        timing.rows.append({"run": f"{label}{seeded(s)} / {s['set']}", "motion s": s["mean_motion_s"],
                             "compute s (model)": _sum(s.get("modelled_sensing_s"), s.get("modelled_plan_s")),
                             "cycle s": s["mean_cycle_s"], "success %": success, "picks/hour": s["picks_per_hour"],
                             "sensing s (wall)": s["mean_sensing_s"], "planning s (wall)": s["mean_plan_s"],
                             "picks/hour (wall)": s.get("picks_per_hour_wall")})
-    novel.rows.sort(key=lambda r: _order(r["set"], r["policy"]))
+    pooled = _pooled(summaries)
+    novel.rows.sort(key=lambda r: _order(r["set"], r["policy"].split(" ")[0]))
     timing.rows.sort(key=lambda r: _order(*reversed(r["run"].split(" / "))))
     known.rows.sort(key=lambda r: list(PAPER_KNOWN).index(r["metric"]) if r["metric"] in PAPER_KNOWN else 0)
-    return [t for t in (novel, known, classified, timing) if t.rows]
+    return [t for t in (novel, pooled, known, classified, timing) if t.rows]
+
+
+def _pool(runs: list[dict[str, Any]]) -> dict[str, Any]:
+    """Runs' trials pooled: successes / valid trials of each run, the pooled success rate (None
+    without a valid trial) and the mean of the runs' APs (None where none has one)."""
+    per_run = [(round(r["success_rate"] * (r["trials"] - r["invalid"])), r["trials"] - r["invalid"]) for r in runs]
+    valid = sum(v for _, v in per_run)
+    aps = [r["ap"] for r in runs if r["ap"] is not None]
+    return {"per_run": per_run, "valid": valid, "success": sum(w for w, _ in per_run) / valid if valid else None,
+            "ap": sum(aps) / len(aps) if aps else None}
+
+
+def _seeded(summaries: list[dict[str, Any]]):
+    """A function giving a run's " [seed N]" where the runs hold that policy and set more than once
+    (the runs of a multi-seed study), "" otherwise, so one run's report reads as before."""
+    from collections import Counter
+
+    count = Counter((s["label"], s["set"]) for s in summaries)
+    return lambda s: f" [seed {s.get('seed')}]" if count[(s["label"], s["set"])] > 1 else ""
+
+
+def _pooled(summaries: list[dict[str, Any]]) -> Table:
+    """Policies (and the known-state analytic policy) run on one set with several seeds, their trials
+    pooled: one seeded run of ~100 trials has a standard error of ~4.5 points, so a ranking of
+    policies is read here, not from any one seed's row."""
+    table = Table("Novel objects: pooled over seeds",
+                  "Runs of one policy on one set with different seeds (the same seed's scenes are the same "
+                  "for every policy): successes over all valid trials with the binomial standard error, "
+                  "each seed's successes / valid trials, and the mean of the seeds' AP.")
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for s in summaries:
+        if s["policy"] != "random-surface":
+            groups.setdefault((s["label"], s["set"]), []).append(s)
+    for (label, set_name), runs in groups.items():
+        if len({r.get("seed") for r in runs}) < 2:
+            continue
+        runs = sorted(runs, key=lambda r: (r.get("seed") is None, r.get("seed") or 0))
+        pool = _pool(runs)
+        rate, n = pool["success"], pool["valid"]
+        table.rows.append({
+            "policy": label, "set": set_name, "seeds": ", ".join(str(r.get("seed")) for r in runs),
+            "trials": n, "success %": _percent(rate),
+            "+- se (points)": None if rate is None else round(100 * (rate * (1 - rate) / n) ** 0.5, 1),
+            "per seed": ", ".join(f"{w}/{v}" for w, v in pool["per_run"]), "mean AP %": _percent(pool["ap"])})
+    table.rows.sort(key=lambda r: _order(r["set"], r["policy"].split("-rwr")[0]))
+    return table
 
 
 def build_report(run_dirs: list[Path], out: Path, command: str | None = None,
@@ -216,11 +265,15 @@ def _write_report(run_dirs: list[Path], summaries: list[dict[str, Any]], all_rec
     galleries: dict[str, list[tuple[str, str]]] = {FAILURES: [], QUALITY_MAPS: []}  # title -> (png, caption)
     per_object = {}
     curves: dict[str, list[tuple[str, np.ndarray, np.ndarray]]] = {}  # figure group -> (label, q, success)
+    seeded = _seeded(summaries)
     for run_dir, summary, records in zip(run_dirs, summaries, all_records, strict=True):
         valid = [r for r in records if r.get("valid")]
         known = summary["policy"] == "analytic"
-        label = summary["label"]
-        per_object[f"{label} / {summary['set']}"] = summary["per_object"]
+        label = summary["label"] + seeded(summary)
+        counts = per_object.setdefault(f"{summary['label']} / {summary['set']}", {})  # seeds add up
+        for key, (wins, trials) in summary["per_object"].items():
+            before = counts.get(key, (0, 0))
+            counts[key] = [before[0] + wins, before[1] + trials]
         success = np.array([bool(r["success"]) for r in valid])
         q = np.array([np.nan if r.get("policy_q") is None else float(r["policy_q"]) for r in valid])
         keep = np.isfinite(q)
@@ -231,8 +284,12 @@ def _write_report(run_dirs: list[Path], summaries: list[dict[str, Any]], all_rec
         galleries[FAILURES] += _gallery(run_dir, [r for r in records if not r.get("success")], out, caption)
         galleries[QUALITY_MAPS] += _quality_gallery(run_dir, records, out, caption)
     figures = []
-    headline = [{"policy": s["label"], "set": s["set"], "success": s["success_rate"], "ap": s["ap"]}
-                for s in summaries if s["policy"] not in ("analytic", "random-surface")]
+    runs_of: dict[tuple[str, str], list[dict[str, Any]]] = {}  # one bar per policy and set, seeds pooled
+    for s in summaries:
+        if s["policy"] not in ("analytic", "random-surface"):
+            runs_of.setdefault((s["label"], s["set"]), []).append(s)
+    headline = [{"policy": label, "set": set_name, "success": pool["success"] or 0.0, "ap": pool["ap"]}
+                for (label, set_name), runs in runs_of.items() for pool in [_pool(runs)]]
     if headline_figure(headline, out / "headline.png", POLICY_ORDER):
         figures.append("headline.png")
     for group in sorted(curves, key=lambda g: _order(g.removesuffix("_known"), "") + (g,)):

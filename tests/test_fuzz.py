@@ -483,3 +483,19 @@ def box_mesh_path(tmp_path):
     path = tmp_path / "box.stl"
     trimesh.creation.box(extents=(0.06, 0.04, 0.02)).export(path)
     return path
+
+
+def test_generate_resume_needs_only_the_disk_it_has_not_written(tmp_path, monkeypatch):
+    """A resumed run keeps (or rewrites in place) what --out holds, so its disk estimate counts only
+    the rest: with no free disk at all a fresh run is refused and a finished one still resumes."""
+    base = ["generate", "--objects", "basic", "--datapoints", "4", "--grasps-per-object", "20", "--workers", "1",
+            "--json"]
+    done = tmp_path / "done"
+    first = runner.invoke(app, [*base, "--out", str(done)])
+    assert first.exit_code == 0, first.stderr[-1500:]
+    monkeypatch.setattr("shutil.disk_usage", lambda _p: shutil_usage(total=2**30, used=2**30, free=0))
+    assert_clean_exit_2(runner.invoke(app, [*base, "--out", str(tmp_path / "fresh")]), as_json=True,
+                        needle="--datapoints 4: needs about")
+    assert not (tmp_path / "fresh").exists()
+    again = runner.invoke(app, [*base, "--out", str(done), "--resume"])
+    assert again.exit_code == 0, again.stderr[-1500:]

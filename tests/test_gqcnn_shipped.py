@@ -16,7 +16,7 @@ from suctionbench.resources import asset_path
 from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN
 
 MODEL_DIR = default_model_dir()
-VAL_ACC, VAL_AP = 0.914, 0.912
+VAL_ACC, VAL_AP = 0.912, 0.916
 """The shipped model's held-out accuracy and AP, as its README and the project README quote them."""
 
 
@@ -29,10 +29,14 @@ def test_shipped_model_card_and_held_out_metrics():
     model = load_model(MODEL_DIR)
     card = model.card
     # context-pose-wide (context-pose's layout at twice the widths: what the capacity step at full
-    # scale made the default, held-out 0.908 -> 0.914) with the soft target, on the 1.2 M-datapoint
-    # dataset of the pick's loads (the issue's floor is 1 M where 2.8 M cannot be generated in the
-    # session; eval/gqcnn/README.md)
-    assert card["arch"] == "context-pose-wide" and card["dataset"]["datapoints"] >= 1_000_000
+    # scale made the default, held-out 0.908 -> 0.914) with the soft target, trained on the 1.2 M
+    # datapoints of the pick's loads and then (--init) on 1.6 M more of the same corpus, the paper's
+    # 2.8 M in all (basic AP over 90 % with both policies; eval/gqcnn/README.md)
+    assert card["arch"] == "context-pose-wide" and card["dataset"]["datapoints"] == 1_600_000
+    assert card["training"]["config"]["init"] == "assets/models/gqcnn-sensor48-wide"
+    first = load_model(asset_path("models", "gqcnn-sensor48-wide")).card
+    assert first["dataset"]["datapoints"] + card["dataset"]["datapoints"] >= 2_800_000
+    assert first["arch"] == card["arch"] and first["dataset"]["thumbnail"] == card["dataset"]["thumbnail"]
     assert card["label"]["target"] == "soft"
     # rendered in the simulated camera's own noise with a 48 px grasp crop (what made it the default
     # over the same recipe on paper-noise 96 px data: held-out 0.908 against 0.867), and the CEM

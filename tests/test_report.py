@@ -219,3 +219,17 @@ def test_report_shows_a_dense_policys_quality_maps(tmp_path):
     assert names and "Quality maps" in page and "Quality maps" in (tmp_path / "report" / "report.md").read_text()
     picture = np.asarray(Image.open(tmp_path / "report" / names[0]))
     assert picture.ndim == 3 and (picture == 255).all(axis=2).any()  # in colour, with the grasp's cross
+
+
+def test_two_tasks_of_one_policy_and_set_keep_their_own_object_counts(tmp_path):
+    # The known-state policy runs on the adversarial set twice (its novel-set task and known_objects):
+    # one key each in the per-object counts (the second used to overwrite the first's), and two tasks
+    # are not two seeds: no seed marks, no pooled row.
+    runs = [_synthetic_run(tmp_path / task, "analytic", "rwr", [{"success": s, "policy_q": 0.5} for s in wins],
+                           task_name=task)
+            for task, wins in (("adversarial", (True, True, False)), ("known_objects", (False, False, False)))]
+    report = build_report(runs, tmp_path / "report")
+    page = (tmp_path / "report" / "report.md").read_text()
+    assert "analytic-rwr / adversarial (adversarial): 1/1" in page  # obj0: trial 0 of each run
+    assert "analytic-rwr / adversarial (known_objects): 0/1" in page
+    assert "[seed" not in page and "Novel objects: pooled over seeds" not in report["tables"]

@@ -179,13 +179,18 @@ def _pool(runs: list[dict[str, Any]]) -> dict[str, Any]:
             "ap": sum(aps) / len(aps) if aps else None}
 
 
-def _seeded(summaries: list[dict[str, Any]]):
-    """A function giving a run's " [seed N]" where the runs hold that policy and set more than once
-    (the runs of a multi-seed study), "" otherwise, so one run's report reads as before."""
-    from collections import Counter
+def _study(s: dict[str, Any]) -> tuple[str, str, str]:
+    """What makes runs seeds of one study: the same policy (label), task and set."""
+    return s["label"], s["task"], s["set"]
 
-    count = Counter((s["label"], s["set"]) for s in summaries)
-    return lambda s: f" [seed {s.get('seed')}]" if count[(s["label"], s["set"])] > 1 else ""
+
+def _seeded(summaries: list[dict[str, Any]]):
+    """A function giving a run's " [seed N]" where the runs hold its study (`_study`) with more
+    than one seed, "" otherwise, so one run's report reads as before."""
+    seeds: dict[tuple[str, str, str], set] = {}
+    for s in summaries:
+        seeds.setdefault(_study(s), set()).add(s.get("seed"))
+    return lambda s: f" [seed {s.get('seed')}]" if len(seeds[_study(s)]) > 1 else ""
 
 
 def _pooled(summaries: list[dict[str, Any]]) -> Table:
@@ -196,11 +201,11 @@ def _pooled(summaries: list[dict[str, Any]]) -> Table:
                   "Runs of one policy on one set with different seeds (the same seed's scenes are the same "
                   "for every policy): successes over all valid trials with the binomial standard error, "
                   "each seed's successes / valid trials, and the mean of the seeds' AP.")
-    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    groups: dict[tuple[str, str, str], list[dict[str, Any]]] = {}
     for s in summaries:
         if s["policy"] != "random-surface":
-            groups.setdefault((s["label"], s["set"]), []).append(s)
-    for (label, set_name), runs in groups.items():
+            groups.setdefault(_study(s), []).append(s)
+    for (label, _, set_name), runs in groups.items():
         if len({r.get("seed") for r in runs}) < 2:
             continue
         runs = sorted(runs, key=lambda r: (r.get("seed") is None, r.get("seed") or 0))
@@ -266,11 +271,15 @@ def _write_report(run_dirs: list[Path], summaries: list[dict[str, Any]], all_rec
     per_object = {}
     curves: dict[str, list[tuple[str, np.ndarray, np.ndarray]]] = {}  # figure group -> (label, q, success)
     seeded = _seeded(summaries)
+    tasks: dict[tuple[str, str], set] = {}  # two tasks of one policy and set (known_objects) keep apart
+    for s in summaries:
+        tasks.setdefault((s["label"], s["set"]), set()).add(s["task"])
     for run_dir, summary, records in zip(run_dirs, summaries, all_records, strict=True):
         valid = [r for r in records if r.get("valid")]
         known = summary["policy"] == "analytic"
         label = summary["label"] + seeded(summary)
-        counts = per_object.setdefault(f"{summary['label']} / {summary['set']}", {})  # seeds add up
+        task = f" ({summary['task']})" if len(tasks[(summary["label"], summary["set"])]) > 1 else ""
+        counts = per_object.setdefault(f"{summary['label']} / {summary['set']}{task}", {})  # seeds add up
         for key, (wins, trials) in summary["per_object"].items():
             before = counts.get(key, (0, 0))
             counts[key] = [before[0] + wins, before[1] + trials]
@@ -284,12 +293,12 @@ def _write_report(run_dirs: list[Path], summaries: list[dict[str, Any]], all_rec
         galleries[FAILURES] += _gallery(run_dir, [r for r in records if not r.get("success")], out, caption)
         galleries[QUALITY_MAPS] += _quality_gallery(run_dir, records, out, caption)
     figures = []
-    runs_of: dict[tuple[str, str], list[dict[str, Any]]] = {}  # one bar per policy and set, seeds pooled
+    runs_of: dict[tuple[str, str, str], list[dict[str, Any]]] = {}  # one bar per study, seeds pooled
     for s in summaries:
         if s["policy"] not in ("analytic", "random-surface"):
-            runs_of.setdefault((s["label"], s["set"]), []).append(s)
+            runs_of.setdefault(_study(s), []).append(s)
     headline = [{"policy": label, "set": set_name, "success": pool["success"] or 0.0, "ap": pool["ap"]}
-                for (label, set_name), runs in runs_of.items() for pool in [_pool(runs)]]
+                for (label, _, set_name), runs in runs_of.items() for pool in [_pool(runs)]]
     if headline_figure(headline, out / "headline.png", POLICY_ORDER):
         figures.append("headline.png")
     for group in sorted(curves, key=lambda g: _order(g.removesuffix("_known"), "") + (g,)):

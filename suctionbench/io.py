@@ -61,6 +61,14 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
 _HOST = hashlib.sha256(socket.gethostname().encode()).hexdigest()[:6]
 
 
+def bytes_under(directory: str | Path) -> int:
+    """Bytes of the files under `directory` (0 if it is not a directory)."""
+    directory = Path(directory)
+    if not directory.is_dir():
+        return 0
+    return sum(path.stat().st_size for path in directory.rglob("*") if path.is_file())
+
+
 def writer_tag() -> str:
     """'PID-HOST': this process and (a hash of) its host, written into the names of its temporaries."""
     return f"{os.getpid()}-{_HOST}"

@@ -23,6 +23,7 @@ from suctionbench.cli.common import (
     run_command,
 )
 from suctionbench.errors import InputError
+from suctionbench.io import bytes_under
 from suctionbench.validate import BYTES_PER_DATAPOINT, label_memory, output_dir, require_disk, require_memory
 
 LOADS = ("episode", "static")
@@ -96,7 +97,7 @@ def generate(
         if proposals is not None and scene != "table":
             raise InputError(f"--proposals with --scene {scene}: on-policy grasps are proposed on table scenes only")
         output_dir(out, "--out")
-        held = _bytes_under(out) if resume else 0  # a resumed run keeps (or rewrites in place) what is there
+        held = bytes_under(out) if resume else 0  # a resumed run keeps (or rewrites in place) what is there
         require_disk(out, max(datapoints * BYTES_PER_DATAPOINT - held, 0), f"--datapoints {datapoints}")
         require_memory(label_memory(grasps_per_object, label.perturbation.num_samples)
                        * resolve_workers(workers), f"--grasps-per-object {grasps_per_object} x --workers")
@@ -132,13 +133,6 @@ def generate(
         return summary
 
     run_command(as_json, body)
-
-
-def _bytes_under(directory: Path) -> int:
-    """Bytes of the files under `directory` (0 if it is not one)."""
-    if not directory.is_dir():
-        return 0
-    return sum(path.stat().st_size for path in directory.rglob("*") if path.is_file())
 
 
 def short_dataset_note(card: dict[str, Any], requested: int, max_images: int) -> str:

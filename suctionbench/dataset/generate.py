@@ -32,7 +32,7 @@ import numpy as np
 from suctionbench.config import STANDARD_GRAVITY, LabelConfig, to_dict
 from suctionbench.dataset.storage import FIELDS, SPLIT_DIR, TENSOR_DIR
 from suctionbench.errors import InputError
-from suctionbench.io import atomic_path
+from suctionbench.io import atomic_path, bytes_under
 from suctionbench.sensing.noise import DepthNoiseConfig, check_noise_model
 from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN, ThumbnailConfig
 
@@ -558,7 +558,7 @@ def _generation_summary(runs: list[dict[str, Any]], units: int, out: Path, datap
     seconds = sum(float(r.get("seconds", 0.0)) for r in runs)
     made = sum(int(r.get("datapoints", 0)) for r in runs)
     timed_units = sum(int(r.get("units", 0)) for r in runs)
-    size = sum(p.stat().st_size for sub in (TENSOR_DIR, SPLIT_DIR) for p in (out / sub).rglob("*") if p.is_file())
+    size = sum(bytes_under(out / sub) for sub in (TENSOR_DIR, SPLIT_DIR))
     return {"recorded_seconds": round(seconds, 1), "recorded_datapoints": made,
             "datapoints_per_s": round(made / seconds, 1) if seconds > 0 else None,
             "untimed_units": units - timed_units, "bytes": size,

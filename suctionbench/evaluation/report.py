@@ -179,18 +179,20 @@ def _pool(runs: list[dict[str, Any]]) -> dict[str, Any]:
             "ap": sum(aps) / len(aps) if aps else None}
 
 
-def _study(s: dict[str, Any]) -> tuple[str, str, str]:
-    """What makes runs seeds of one study: the same policy (label), task and set."""
-    return s["label"], s["task"], s["set"]
+def _studies(summaries: list[dict[str, Any]]) -> dict[tuple[str, str, str], list[dict[str, Any]]]:
+    """The runs grouped into studies, (label, task, set) -> runs in order: the runs of one policy on
+    one task and set are seeds of one study."""
+    studies: dict[tuple[str, str, str], list[dict[str, Any]]] = {}
+    for s in summaries:
+        studies.setdefault((s["label"], s["task"], s["set"]), []).append(s)
+    return studies
 
 
 def _seeded(summaries: list[dict[str, Any]]):
-    """A function giving a run's " [seed N]" where the runs hold its study (`_study`) with more
-    than one seed, "" otherwise, so one run's report reads as before."""
-    seeds: dict[tuple[str, str, str], set] = {}
-    for s in summaries:
-        seeds.setdefault(_study(s), set()).add(s.get("seed"))
-    return lambda s: f" [seed {s.get('seed')}]" if len(seeds[_study(s)]) > 1 else ""
+    """A function giving a run's " [seed N]" where its study (`_studies`) holds more than one seed,
+    "" otherwise, so one run's report reads as before."""
+    several = {key for key, runs in _studies(summaries).items() if len({r.get("seed") for r in runs}) > 1}
+    return lambda s: f" [seed {s.get('seed')}]" if (s["label"], s["task"], s["set"]) in several else ""
 
 
 def _pooled(summaries: list[dict[str, Any]]) -> Table:
@@ -201,12 +203,8 @@ def _pooled(summaries: list[dict[str, Any]]) -> Table:
                   "Runs of one policy on one set with different seeds (the same seed's scenes are the same "
                   "for every policy): successes over all valid trials with the binomial standard error, "
                   "each seed's successes / valid trials, and the mean of the seeds' AP.")
-    groups: dict[tuple[str, str, str], list[dict[str, Any]]] = {}
-    for s in summaries:
-        if s["policy"] != "random-surface":
-            groups.setdefault(_study(s), []).append(s)
-    for (label, _, set_name), runs in groups.items():
-        if len({r.get("seed") for r in runs}) < 2:
+    for (label, _, set_name), runs in _studies(summaries).items():
+        if runs[0]["policy"] == "random-surface" or len({r.get("seed") for r in runs}) < 2:
             continue
         runs = sorted(runs, key=lambda r: (r.get("seed") is None, r.get("seed") or 0))
         pool = _pool(runs)
@@ -216,7 +214,7 @@ def _pooled(summaries: list[dict[str, Any]]) -> Table:
             "trials": n, "success %": _percent(rate),
             "+- se (points)": None if rate is None else round(100 * (rate * (1 - rate) / n) ** 0.5, 1),
             "per seed": ", ".join(f"{w}/{v}" for w, v in pool["per_run"]), "mean AP %": _percent(pool["ap"])})
-    table.rows.sort(key=lambda r: _order(r["set"], r["policy"].split("-rwr")[0]))
+    table.rows.sort(key=lambda r: _order(r["set"], r["policy"]))
     return table
 
 
@@ -271,9 +269,10 @@ def _write_report(run_dirs: list[Path], summaries: list[dict[str, Any]], all_rec
     per_object = {}
     curves: dict[str, list[tuple[str, np.ndarray, np.ndarray]]] = {}  # figure group -> (label, q, success)
     seeded = _seeded(summaries)
+    studies = _studies(summaries)
     tasks: dict[tuple[str, str], set] = {}  # two tasks of one policy and set (known_objects) keep apart
-    for s in summaries:
-        tasks.setdefault((s["label"], s["set"]), set()).add(s["task"])
+    for label, task, set_name in studies:
+        tasks.setdefault((label, set_name), set()).add(task)
     for run_dir, summary, records in zip(run_dirs, summaries, all_records, strict=True):
         valid = [r for r in records if r.get("valid")]
         known = summary["policy"] == "analytic"
@@ -293,12 +292,9 @@ def _write_report(run_dirs: list[Path], summaries: list[dict[str, Any]], all_rec
         galleries[FAILURES] += _gallery(run_dir, [r for r in records if not r.get("success")], out, caption)
         galleries[QUALITY_MAPS] += _quality_gallery(run_dir, records, out, caption)
     figures = []
-    runs_of: dict[tuple[str, str, str], list[dict[str, Any]]] = {}  # one bar per study, seeds pooled
-    for s in summaries:
-        if s["policy"] not in ("analytic", "random-surface"):
-            runs_of.setdefault(_study(s), []).append(s)
     headline = [{"policy": label, "set": set_name, "success": pool["success"] or 0.0, "ap": pool["ap"]}
-                for (label, _, set_name), runs in runs_of.items() for pool in [_pool(runs)]]
+                for (label, _, set_name), runs in studies.items()  # one bar per study, seeds pooled
+                if runs[0]["policy"] not in ("analytic", "random-surface") for pool in [_pool(runs)]]
     if headline_figure(headline, out / "headline.png", POLICY_ORDER):
         figures.append("headline.png")
     for group in sorted(curves, key=lambda g: _order(g.removesuffix("_known"), "") + (g,)):

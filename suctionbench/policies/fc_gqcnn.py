@@ -286,7 +286,8 @@ class FCGQCNNPolicy:
         q_map = np.full(cloud.valid.shape, np.nan, dtype=np.float32)
         q_map[dense["rows"], dense["cols"]] = dense["q"]
         rank = ranking(q_map, dense["rows"], dense["cols"], cfg.quality_sigma) if cfg.quality_sigma else dense["q"]
-        best, q = int(np.argmax(rank)), float(dense["q"][int(np.argmax(rank))])
+        best = int(np.argmax(rank))
+        q = float(dense["q"][best])
         if cfg.refine:
             count = min(cfg.refine, len(dense["q"]))
             top = np.argpartition(-rank, count - 1)[:count]

@@ -16,7 +16,7 @@ from suctionbench.resources import asset_path
 from suctionbench.sensing.thumbnails import THUMBNAIL_GQCNN
 
 MODEL_DIR = default_model_dir()
-VAL_ACC, VAL_AP = 0.912, 0.916
+VAL_ACC, VAL_AP = 0.921, 0.928
 """The shipped model's held-out accuracy and AP, as its README and the project README quote them."""
 
 
@@ -31,8 +31,10 @@ def test_shipped_model_card_and_held_out_metrics():
     # context-pose-wide (context-pose's layout at twice the widths: what the capacity step at full
     # scale made the default, held-out 0.908 -> 0.914) with the soft target, trained on the 1.2 M
     # datapoints of the pick's loads and then (--init) on 1.6 M more of the same corpus, the paper's
-    # 2.8 M in all (basic AP over 90 % with both policies; eval/gqcnn/README.md)
+    # 2.8 M in all (basic AP over 90 % with both policies; eval/gqcnn/README.md), four epochs there:
+    # the two-epoch run extended, held-out 0.912 -> 0.921 (epochs 5-6 did not raise it further)
     assert card["arch"] == "context-pose-wide" and card["dataset"]["datapoints"] == 1_600_000
+    assert card["training"]["epochs_completed"] == 4 == len(card["history"])
     assert card["training"]["config"]["init"] == "assets/models/gqcnn-sensor48-wide"
     first = load_model(asset_path("models", "gqcnn-sensor48-wide")).card
     assert first["dataset"]["datapoints"] + card["dataset"]["datapoints"] >= 2_800_000

@@ -16,7 +16,7 @@ mkdir -p "$RUNS"
 CONE=(--policy-arg 'sampler={max_optical_axis_angle=0.5235987755982988}')
 # The committed bin tables were made with gqcnn-sensor48, the default until gqcnn-sensor48-wide replaced
 # it; naming it here keeps their figures reproducible (a rerun's rows then read "gqcnn [gqcnn-sensor48]").
-# The later defaults (gqcnn-sensor48-wide, gqcnn-sensor48-wide-2m8) are not yet run in bins
+# The later defaults (gqcnn-sensor48-wide, -wide-2m8, -wide-2m8-e4) are not yet run in bins
 # (eval/bin/README.md, "Probe: the wider default").
 GQ_MODEL=(--model assets/models/gqcnn-sensor48)
 run() {  # name, eval options...; a finished run (its .done marker) is kept

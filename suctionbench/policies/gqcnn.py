@@ -79,7 +79,7 @@ from suctionbench.sensing.thumbnails import (
     sampled_image,
 )
 
-DEFAULT_MODEL = ("models", "gqcnn-sensor48-wide-2m8")
+DEFAULT_MODEL = ("models", "gqcnn-sensor48-wide-2m8-e4")
 """Path parts, under assets/, of the model `make_policy("gqcnn")` loads when given none."""
 
 ADV_MODEL = ("models", "gqcnn-adv")

@@ -42,7 +42,7 @@ from suctionbench.learning.models import (
     count_parameters,
     tf_lrn_to_torch,
 )
-from suctionbench.learning.train import _loss, evaluate, train
+from suctionbench.learning.train import _loss, evaluate, score_model, train
 from suctionbench.learning.train_config import TrainConfig, decision_threshold
 from suctionbench.sensing.noise import DepthNoiseConfig
 from suctionbench.sensing.thumbnails import (
@@ -104,7 +104,8 @@ def synthetic_context(images: np.ndarray) -> np.ndarray:
     return context
 
 
-def write_synthetic(directory, n: int = N_SYNTH, per_shard: int = 64, seed: int = 0) -> None:
+def write_synthetic(directory, n: int = N_SYNTH, per_shard: int = 64, seed: int = 0, grasps_per_image: int = 1
+                    ) -> None:
     rng = np.random.default_rng(seed)
     images, poses, metric = synthetic_thumbnails(n, rng)
     context = synthetic_context(images)
@@ -117,7 +118,8 @@ def write_synthetic(directory, n: int = N_SYNTH, per_shard: int = 64, seed: int 
             "depth_ims_tf_table": images[part, ..., None], "context_ims_tf_table": context[part, ..., None],
             "hand_poses": poses[part], "object_context": np.zeros((k, 6), np.float32),
             "robust_suction_wrench_resistance": metric[part], "object_labels": objects[part],
-            "pose_labels": np.zeros(k, np.int32), "image_labels": np.arange(start, start + k, dtype=np.int32),
+            "pose_labels": np.zeros(k, np.int32),
+            "image_labels": (np.arange(start, start + k) // grasps_per_image).astype(np.int32),
             "grasp_labels": np.zeros(k, np.int32), "seal_flags": np.ones(k, np.uint8),
             "wrench_resistance": (metric[part] > 0.2).astype(np.uint8),
         })
@@ -685,6 +687,24 @@ def test_learning_rate_staircase(dataset, tmp_path):
     train(dataset, tmp_path, TrainConfig(epochs=2, decay_epochs=0.5, decay_rate=0.5, **FAST))
     history = json.loads((tmp_path / CARD_NAME).read_text())["history"]
     assert [h["lr"] for h in history] == [0.01, 0.01 * 0.5 ** math.floor(4 * 64 / 102.5)]
+
+
+def test_history_scores_each_views_top_grasp(tmp_path):
+    # After every epoch the trainer records the label of each held-out view's top-scored grasp (what
+    # the policies act on): the same figure `model score` computes from the saved model on the same
+    # split, so the two agree; four grasps per view (32 per object, object-wise split: a view's grasps
+    # stay together), so every view is ranked.
+    data_dir = tmp_path / "views"
+    write_synthetic(data_dir, grasps_per_image=4)
+    out = tmp_path / "run"
+    train(data_dir, out, TrainConfig(epochs=1, split="object_wise", **FAST))
+    recorded = json.loads((out / CARD_NAME).read_text())["history"][-1]["val_top_grasp_success"]
+    model = load_model(out)
+    data = model.split_data(data_dir, "object_wise", "val")
+    scored = score_model(model, data, 0.2)
+    expected = top_grasp_success(scored["labels"], scored["scores"], data.values("image_labels"))
+    assert expected["images"] == data.num_datapoints // 4
+    assert recorded == pytest.approx(expected["top_grasp_success"]) and 0.0 <= recorded <= 1.0
 
 
 # ----------------------------------------------------------------------------------------------

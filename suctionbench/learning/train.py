@@ -74,7 +74,12 @@ from suctionbench.learning.data import (
     labels_of,
     to_tensors,
 )
-from suctionbench.learning.metrics import average_precision, plot_precision_recall, precision_recall_curve
+from suctionbench.learning.metrics import (
+    average_precision,
+    plot_precision_recall,
+    precision_recall_curve,
+    top_grasp_success,
+)
 from suctionbench.learning.models import (
     POSE_DIM,
     activation_bytes,
@@ -506,6 +511,7 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
     images_total = epochs_left * train_data.num_datapoints
     run_images, run_seconds = 0, 0.0
     evaluation: dict[str, Any] | None = None
+    val_images = val_data.values("image_labels") if session.epoch < config.epochs else None
     while session.epoch < config.epochs:
         epoch = session.epoch + 1
 
@@ -527,6 +533,10 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
             "fit_accuracy": fit["accuracy"], "fit_ap": fit["ap"],
             "val_loss": evaluation["loss"], "val_accuracy": evaluation["accuracy"], "val_ap": evaluation["ap"],
             "val_accuracy_at_half": evaluation["accuracy_at_half"],
+            # what the policies act on, each view's top-scored grasp: the figure that ranked models as
+            # the simulation did where accuracy and AP did not (eval/gqcnn/README.md, "Now")
+            "val_top_grasp_success": top_grasp_success(evaluation["labels"], evaluation["scores"],
+                                                       val_images)["top_grasp_success"],
             "train_seconds": result["seconds"], "train_images_per_s": result["images"] / max(result["seconds"], 1e-9),
         }))
         _checkpoint(out_dir, session, config, resume_key, base_card, evaluation, device)

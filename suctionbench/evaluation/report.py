@@ -128,7 +128,7 @@ def _tables(summaries: list[dict[str, Any]]) -> list[Table]:
                    "planning time, suctionbench.evaluation.cycle), so the same seeds give the same figure. "
                    "Measured wall times of this run (rendering the noisy depth image, planning) and the "
                    "picks per hour they would give are reported beside it; they vary with the machine's load.")
-    seeded = _seeded(summaries)
+    seeded = _seeded(_studies(summaries))
     for s in summaries:
         label = s["label"]
         success = _percent(s["success_rate"])
@@ -188,10 +188,15 @@ def _studies(summaries: list[dict[str, Any]]) -> dict[tuple[str, str, str], list
     return studies
 
 
-def _seeded(summaries: list[dict[str, Any]]):
+def _several_seeds(runs: list[dict[str, Any]]) -> bool:
+    """Whether a study's runs hold more than one seed (two tasks of one policy and set are not seeds)."""
+    return len({r.get("seed") for r in runs}) > 1
+
+
+def _seeded(studies: dict[tuple[str, str, str], list[dict[str, Any]]]):
     """A function giving a run's " [seed N]" where its study (`_studies`) holds more than one seed,
     "" otherwise, so one run's report reads as before."""
-    several = {key for key, runs in _studies(summaries).items() if len({r.get("seed") for r in runs}) > 1}
+    several = {key for key, runs in studies.items() if _several_seeds(runs)}
     return lambda s: f" [seed {s.get('seed')}]" if (s["label"], s["task"], s["set"]) in several else ""
 
 
@@ -204,7 +209,7 @@ def _pooled(summaries: list[dict[str, Any]]) -> Table:
                   "for every policy): successes over all valid trials with the binomial standard error, "
                   "each seed's successes / valid trials, and the mean of the seeds' AP.")
     for (label, _, set_name), runs in _studies(summaries).items():
-        if runs[0]["policy"] == "random-surface" or len({r.get("seed") for r in runs}) < 2:
+        if runs[0]["policy"] == "random-surface" or not _several_seeds(runs):
             continue
         runs = sorted(runs, key=lambda r: (r.get("seed") is None, r.get("seed") or 0))
         pool = _pool(runs)
@@ -268,8 +273,8 @@ def _write_report(run_dirs: list[Path], summaries: list[dict[str, Any]], all_rec
     galleries: dict[str, list[tuple[str, str]]] = {FAILURES: [], QUALITY_MAPS: []}  # title -> (png, caption)
     per_object = {}
     curves: dict[str, list[tuple[str, np.ndarray, np.ndarray]]] = {}  # figure group -> (label, q, success)
-    seeded = _seeded(summaries)
     studies = _studies(summaries)
+    seeded = _seeded(studies)
     tasks: dict[tuple[str, str], set] = {}  # two tasks of one policy and set (known_objects) keep apart
     for label, task, set_name in studies:
         tasks.setdefault((label, set_name), set()).add(task)

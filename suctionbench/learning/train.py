@@ -511,7 +511,7 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
     images_total = epochs_left * train_data.num_datapoints
     run_images, run_seconds = 0, 0.0
     evaluation: dict[str, Any] | None = None
-    val_images = val_data.values("image_labels") if session.epoch < config.epochs else None
+    val_views = val_data.values("image_labels") if session.epoch < config.epochs else None  # read once
     while session.epoch < config.epochs:
         epoch = session.epoch + 1
 
@@ -536,7 +536,7 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
             # what the policies act on, each view's top-scored grasp: the figure that ranked models as
             # the simulation did where accuracy and AP did not (eval/gqcnn/README.md, "Now")
             "val_top_grasp_success": top_grasp_success(evaluation["labels"], evaluation["scores"],
-                                                       val_images)["top_grasp_success"],
+                                                       val_views)["top_grasp_success"],
             "train_seconds": result["seconds"], "train_images_per_s": result["images"] / max(result["seconds"], 1e-9),
         }))
         _checkpoint(out_dir, session, config, resume_key, base_card, evaluation, device)

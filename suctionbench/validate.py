@@ -82,6 +82,7 @@ OPTION_RULES: dict[str, Rule] = {
     "thumbnail_crop": Rule(16, 96, meaning="image pixels the grasp thumbnail's 32 x 32 spans; at most gqcnn's "
                                            "96, the crop a grasp's visibility margin keeps inside the image"),
     "average": Rule(0.0, 1.0, low_open=True, meaning="the moving average's decay per step, below 1"),
+    "learning_rate": Rule(0.0, 10.0, low_open=True, meaning="SGD's base step size"),
     # physical quantities and thresholds
     "mass": Rule(0.0, 1000.0, low_open=True, meaning="kg"),
     "threshold": Rule(0.0, 1.0, meaning="a robust wrench resistance"),

@@ -865,6 +865,28 @@ def test_cli_train_and_show(dataset, tmp_path):
     assert result.exit_code == 2
 
 
+def test_cli_learning_rate_sets_the_base_of_the_schedule(dataset, tmp_path):
+    # --learning-rate replaces gqcnn's base 0.01; the staircase decays from it (lr = base * 0.95 **
+    # floor(examples seen / examples per decay), and each epoch records the rate it started at, so
+    # the first epoch's, with no example seen, is the base itself). The card's command names it only when it is not gqcnn's
+    # 0.01, so earlier cards' commands are unchanged (the default run's test above).
+    runner = CliRunner()
+    base = ["train", "--dataset", str(dataset), "--arch", "compact", "--epochs", "1", "--no-augment", "--json"]
+    result = runner.invoke(app, [*base, "--out", str(tmp_path / "low"), "--learning-rate", "0.0025"])
+    assert result.exit_code == 0, result.output
+    card = json.loads((tmp_path / "low" / CARD_NAME).read_text())
+    assert card["history"][0]["lr"] == pytest.approx(0.0025) and "--learning-rate 0.0025" in card["command"]
+    assert card["training"]["config"]["learning_rate"] == 0.0025
+    result = runner.invoke(app, [*base, "--out", str(tmp_path / "default")])
+    card = json.loads((tmp_path / "default" / CARD_NAME).read_text())
+    assert card["history"][0]["lr"] == pytest.approx(0.01) and "--learning-rate" not in card["command"]
+    for bad in ("0", "-0.1", "nan"):
+        result = runner.invoke(app, [*base, "--out", str(tmp_path / "bad"), "--learning-rate", bad])
+        error = json.loads(result.stdout.strip().splitlines()[-1])["error"]
+        assert result.exit_code == 2 and "--learning-rate" in error, error
+    assert not (tmp_path / "bad").exists()
+
+
 def test_the_saved_weights_are_the_moving_average_of_the_iterates(dataset, tmp_path, monkeypatch):
     # --average d: after every SGD step k the average is a_1 = w_1, a_k = d a_(k-1) + (1 - d) w_k
     # (an exponential moving average, Polyak averaging); the averaged network is the one scored and

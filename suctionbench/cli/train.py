@@ -57,9 +57,15 @@ def train_command(dataset: Path | str, out: Path | str, config: Any) -> str:
         "--target", config.target,
         "--seed", str(config.seed),
         *(["--init", config.init] if config.init else []),
+        *(["--learning-rate", str(config.learning_rate)] if config.learning_rate != _GQCNN_LEARNING_RATE else []),
         *(["--average", str(config.average)] if config.average is not None else []),
         "--load-threads", str(config.load_threads),
     ])
+
+
+_GQCNN_LEARNING_RATE = 0.01
+"""gqcnn's base learning rate, TrainConfig's default: a card's command names --learning-rate only
+when a run chose another, so the commands of earlier cards stay what they ran."""
 
 
 @app.command("train")
@@ -85,6 +91,9 @@ def train_cmd(
                                              "soft (the robust label itself, as a probability).")] = "binary",
     init: Annotated[str | None, typer.Option(help="Fine-tune: start from this trained model's weights and input "
                                                   "normalisation (same --arch).")] = None,
+    learning_rate: Annotated[float, typer.Option(help="Base learning rate, decayed by gqcnn's staircase (gqcnn: "
+                                                      "0.01). With --init, e.g. where the model's own run left "
+                                                      "off, so a fine-tune does not restart high.")] = _GQCNN_LEARNING_RATE,
     average: Annotated[float | None, typer.Option(help="Score and save an exponential moving average of the weights "
                                                        "with this decay per step (e.g. 0.9995); default: the last "
                                                        "iterate.")] = None,
@@ -108,7 +117,8 @@ def train_cmd(
                              max_train_datapoints=max_datapoints, max_val_datapoints=max_val_datapoints,
                              augment=(AUGMENT_GQCNN if augment_noise else AUGMENT_FLIPS) if augment else AUGMENT_OFF,
                              target=target, seed=seed,
-                             init=init, average=average, load_threads=load_threads)
+                             init=init, learning_rate=learning_rate, average=average,
+                             load_threads=load_threads)
         with _train_progress(not as_json) as update:
             metrics = train(dataset, out, config, progress=update, command=train_command(dataset, out, config),
                             overwrite=overwrite)

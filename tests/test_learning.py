@@ -868,8 +868,8 @@ def test_cli_train_and_show(dataset, tmp_path):
 def test_cli_learning_rate_sets_the_base_of_the_schedule(dataset, tmp_path):
     # --learning-rate replaces gqcnn's base 0.01; the staircase decays from it (lr = base * 0.95 **
     # floor(examples seen / examples per decay), and each epoch records the rate it started at, so
-    # the first epoch's, with no example seen, is the base itself). The card's command names it only when it is not gqcnn's
-    # 0.01, so earlier cards' commands are unchanged (the default run's test above).
+    # the first epoch's, with no example seen, is the base itself). The card's command names it
+    # only when it is not gqcnn's 0.01, so earlier cards' commands are unchanged.
     runner = CliRunner()
     base = ["train", "--dataset", str(dataset), "--arch", "compact", "--epochs", "1", "--no-augment", "--json"]
     result = runner.invoke(app, [*base, "--out", str(tmp_path / "low"), "--learning-rate", "0.0025"])

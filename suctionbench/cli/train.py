@@ -91,9 +91,9 @@ def train_cmd(
                                              "soft (the robust label itself, as a probability).")] = "binary",
     init: Annotated[str | None, typer.Option(help="Fine-tune: start from this trained model's weights and input "
                                                   "normalisation (same --arch).")] = None,
-    learning_rate: Annotated[float, typer.Option(help="Base learning rate, decayed by gqcnn's staircase (gqcnn: "
-                                                      "0.01). With --init, e.g. where the model's own run left "
-                                                      "off, so a fine-tune does not restart high.")] = _GQCNN_LEARNING_RATE,
+    learning_rate: Annotated[float, typer.Option(
+        help="Base learning rate, decayed by gqcnn's staircase (gqcnn: 0.01); with --init, e.g. the rate the "
+             "model's own run ended at.")] = _GQCNN_LEARNING_RATE,
     average: Annotated[float | None, typer.Option(help="Score and save an exponential moving average of the weights "
                                                        "with this decay per step (e.g. 0.9995); default: the last "
                                                        "iterate.")] = None,

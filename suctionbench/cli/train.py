@@ -44,8 +44,12 @@ def _train_progress(enabled: bool) -> Iterator[Callable[[Any], None]]:
 def train_command(dataset: Path | str, out: Path | str, config: Any) -> str:
     """The `suctionbench train` command line that runs `config` (a TrainConfig made from this
     command's options) on `dataset` into `out`, every option spelled out, defaults included: the
-    model card's command reproduces the run even if defaults change."""
+    model card's command reproduces the run even if defaults change. The exception is
+    --learning-rate, named only off gqcnn's rate (TrainConfig's default), so a default run's
+    command reads as it did before the option existed."""
     import shlex
+
+    from suctionbench.learning.train_config import TrainConfig
 
     return shlex.join([
         "suctionbench", "train", "--dataset", str(dataset), "--out", str(out), "--arch", config.arch, "--epochs",
@@ -57,15 +61,10 @@ def train_command(dataset: Path | str, out: Path | str, config: Any) -> str:
         "--target", config.target,
         "--seed", str(config.seed),
         *(["--init", config.init] if config.init else []),
-        *(["--learning-rate", str(config.learning_rate)] if config.learning_rate != _GQCNN_LEARNING_RATE else []),
+        *(["--learning-rate", str(config.learning_rate)] if config.learning_rate != TrainConfig.learning_rate else []),
         *(["--average", str(config.average)] if config.average is not None else []),
         "--load-threads", str(config.load_threads),
     ])
-
-
-_GQCNN_LEARNING_RATE = 0.01
-"""gqcnn's base learning rate, TrainConfig's default: a card's command names --learning-rate only
-when a run chose another, so the commands of earlier cards stay what they ran."""
 
 
 @app.command("train")
@@ -93,7 +92,7 @@ def train_cmd(
                                                   "normalisation (same --arch).")] = None,
     learning_rate: Annotated[float, typer.Option(
         help="Base learning rate, decayed by gqcnn's staircase (gqcnn: 0.01); with --init, e.g. the rate the "
-             "model's own run ended at.")] = _GQCNN_LEARNING_RATE,
+             "model's own run ended at.")] = 0.01,
     average: Annotated[float | None, typer.Option(help="Score and save an exponential moving average of the weights "
                                                        "with this decay per step (e.g. 0.9995); default: the last "
                                                        "iterate.")] = None,

@@ -620,6 +620,25 @@ def test_init_starts_from_the_given_model(dataset, tmp_path):
         train(dataset, tmp_path / "wrong", TrainConfig(arch="dn3", epochs=1, init=str(tmp_path / "a")))
 
 
+def test_init_grows_a_narrower_model_into_a_wider_arch(dataset, tmp_path):
+    # --init with a narrower model of the same layout grows it (suctionbench.learning.grow): with a
+    # vanishing learning rate the wider model predicts what its parent predicts (the growth keeps
+    # the function; SGD at 1e-12 moves nothing measurably), and it keeps the parent's normalisation.
+    train(dataset, tmp_path / "a", TrainConfig(arch="context-pose", epochs=1, seed=3))
+    still = {"learning_rate": 1e-12, "weight_decay": 0.0, "momentum": 0.0}
+    metrics = train(dataset, tmp_path / "grown", TrainConfig(arch="context-pose-wide", epochs=1, seed=4,
+                                                             init=str(tmp_path / "a"), **still))
+    assert metrics["parameters"] == 281_250
+    parent, grown = load_model(tmp_path / "a"), load_model(tmp_path / "grown")
+    assert grown.stats.to_dict() == parent.stats.to_dict()
+    data = SplitData(dataset, "image_wise", "val", image_channels=2, object_context=True)
+    batch = data.load_shard(data.shards[0])
+    np.testing.assert_allclose(grown.predict(batch.images, batch.poses), parent.predict(batch.images, batch.poses),
+                               atol=1e-5)
+    with pytest.raises(InputError, match="cannot grow into --arch context-pose .layer image_stream.conv1.0 is narr"):
+        train(dataset, tmp_path / "shrunk", TrainConfig(arch="context-pose", epochs=1, init=str(tmp_path / "grown")))
+
+
 def test_resume_equals_uninterrupted_run(dataset, tmp_path):
     config = TrainConfig(arch="compact", epochs=3, seed=2, shuffle_shards=2)
     straight = train(dataset, tmp_path / "straight", config)

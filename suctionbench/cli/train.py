@@ -89,7 +89,8 @@ def train_cmd(
     target: Annotated[str, typer.Option(help="What the loss fits: binary (gqcnn's: robust label > threshold) or "
                                              "soft (the robust label itself, as a probability).")] = "binary",
     init: Annotated[str | None, typer.Option(help="Fine-tune: start from this trained model's weights and input "
-                                                  "normalisation (same --arch).")] = None,
+                                                  "normalisation (same --arch, or a wider one of its layout, "
+                                                  "which grows it keeping its function: Net2Net).")] = None,
     learning_rate: Annotated[float, typer.Option(
         help="Base learning rate, decayed by gqcnn's staircase (gqcnn: 0.01); with --init, e.g. the rate the "
              "model's own run ended at.")] = 0.01,

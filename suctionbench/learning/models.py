@@ -77,6 +77,16 @@ centroid, that offset along the approach's lean, the grasp's rise above the cent
 object's length, width and top), read from the dataset field ``object_context``. Distances the
 context thumbnail shows only in pixels of depth-dependent size, and a long object's centre that
 it may not show at all. 70,994 parameters (pc1: 8 x 16 + 16).
+
+context-pose-wide-fc, context-pose-wider: larger, grown from a trained net
+-------------------------------------------------------------------------
+Held-out accuracy rose with size from context-pose to context-pose-wide, and the wide net fits its
+own training data barely better than held-out data: it underfits. Two larger layouts, meant to be
+grown from a trained context-pose-wide (`suctionbench.learning.grow`, ``train --init``) rather
+than trained from scratch: context-pose-wide-fc keeps the 32 filters and makes every fc layer 4x
+wider (image fc 512, pose fc 128, merge fc 512: 1,451,394 parameters, 7.2 M multiply-accumulates,
+most of the added size where it costs little time); context-pose-wider doubles everything (64
+filters, fc 256 / 64 / 256: 1,119,554 parameters, 21.5 M multiply-accumulates, ~3.6x the plan cost).
 """
 
 from __future__ import annotations
@@ -202,9 +212,10 @@ class GQCNN(nn.Module):
         return self.merge(torch.cat([*features, self.pose_stream(poses)], dim=1))
 
 
-def _compact_layout(width: int, **extra) -> dict:
-    """compact's layer layout with `width` filters per conv layer and fc widths scaled alike."""
-    scale = width // 16
+def _compact_layout(width: int, fc_scale: int | None = None, **extra) -> dict:
+    """compact's layer layout with `width` filters per conv layer and fc widths scaled alike
+    (or by `fc_scale` times compact's)."""
+    scale = fc_scale or width // 16
     convs = [("conv1", width, 5, False, True), ("conv2", width, 3, False, False), ("conv3", width, 3, False, True)]
     return {"convs": convs,
             "padding": "valid", "image_fc": 64 * scale, "pose_fc": 16 * scale, "merge_fc": 64 * scale, **extra}
@@ -224,6 +235,10 @@ _SPECS: dict[str, dict] = {
     "context-pose": _compact_layout(16, context=True, object_context=True),
     # context-pose with twice the filters and fc widths: the capacity step with the object context
     "context-pose-wide": _compact_layout(32, context=True, object_context=True),
+    # context-pose-wide with 4x its fc widths: capacity where it costs few multiply-adds (module doc)
+    "context-pose-wide-fc": _compact_layout(32, fc_scale=8, context=True, object_context=True),
+    # context-pose-wide with twice the filters and fc widths (module doc, "larger")
+    "context-pose-wider": _compact_layout(64, context=True, object_context=True),
 }
 
 ARCHITECTURES = tuple(_SPECS)

@@ -214,14 +214,20 @@ def _device(name: str) -> torch.device:
 
 
 def _initial_model(config: TrainConfig) -> Any:
-    """The model `config.init` names (None without one); InputError if its arch is not `config.arch`."""
+    """The model `config.init` names (None without one); InputError if its arch is not `config.arch`
+    and cannot grow into it (`suctionbench.learning.grow`)."""
     if config.init is None:
         return None
     from suctionbench.learning.checkpoint import load_model
 
     base = load_model(config.init)
     if base.arch != config.arch:
-        raise InputError(f"--init '{config.init}': a {base.arch} model; --arch is {config.arch}")
+        from suctionbench.learning.grow import growth_problem
+
+        problem = growth_problem(base.network, build_model(config.arch))
+        if problem is not None:
+            raise InputError(f"--init '{config.init}': a {base.arch} model, which cannot grow into --arch "
+                             f"{config.arch} ({problem})")
     return base
 
 
@@ -458,8 +464,12 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
                          f"(differs in: {changed}); use another output directory or overwrite it (--overwrite)")
 
     base = _initial_model(config) if saved is None else None
-    if base is not None:
+    if base is not None and base.arch == config.arch:
         network.load_state_dict(base.network.state_dict())
+    elif base is not None:  # a wider arch: the same function, more units (suctionbench.learning.grow)
+        from suctionbench.learning.grow import grow
+
+        grow(base.network, network, np.random.default_rng(seq_init))
     if saved is not None:
         stats = NormStats.from_dict(saved["stats"])
     else:

@@ -15,7 +15,9 @@ thumbnail, the context nets (context, context-wide) the grasp and the context th
 fields `SplitData` loads (a dataset without ``context_ims_tf_table`` is refused for the context
 nets), sizes the per-channel normalisation, and is recorded in the model card
 (``image_channels``), which `suctionbench.learning.checkpoint.load_model` checks against the
-architecture and the statistics.
+architecture and the statistics. With `TrainConfig.init` naming a model of a narrower architecture
+of the same layout (context-pose-wide -> context-pose-wide-fc, say), training starts from that
+model grown into the wider one (`suctionbench.learning.grow`): the same predictions, more units.
 
 Determinism. Every random draw comes from generators derived from `TrainConfig.seed` through
 ``numpy.random.SeedSequence(seed).spawn``: the optional training subset, the data order (numpy),

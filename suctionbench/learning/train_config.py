@@ -119,7 +119,8 @@ class TrainConfig:
     init: str | None = None
     """A trained model directory to start from (fine-tuning: its weights and its input
     normalisation, so the network sees inputs scaled as it learnt them); its arch must be `arch`,
-    or one `arch` can grow from (`suctionbench.learning.grow`: a wider net computing the same). None: random initial weights and statistics of this dataset."""
+    or one `arch` can grow from (`suctionbench.learning.grow`: a wider net computing the same).
+    None: random initial weights and statistics of this dataset."""
 
     def __post_init__(self) -> None:
         def integer(value: Any, low: int) -> bool:

@@ -77,11 +77,11 @@ def _shared_inputs(weight: torch.Tensor, mapping: np.ndarray, old_inputs: int,
     return gathered * draws / totals.index_select(1, index)
 
 
-def _concat_mapping(parts: list[tuple[int, np.ndarray]]) -> tuple[np.ndarray, int]:
+def _concat_mapping(parts: list[tuple[np.ndarray, int]]) -> tuple[np.ndarray, int]:
     """One input mapping for a layer that reads several layers' outputs side by side:
-    `parts` = (old width, mapping) per input block in order; returns (mapping, old total width)."""
+    `parts` = (mapping, old width) per input block in order; returns (mapping, old total width)."""
     pieces, offset = [], 0
-    for old, mapping in parts:
+    for mapping, old in parts:
         pieces.append(mapping + offset)
         offset += old
     return np.concatenate(pieces), offset
@@ -90,12 +90,12 @@ def _concat_mapping(parts: list[tuple[int, np.ndarray]]) -> tuple[np.ndarray, in
 def grow(base: GQCNN, target: GQCNN, rng: np.random.Generator) -> None:
     """Set `target`'s weights so that it computes what `base` computes (see the module doc).
 
-    `target` must be growable from `base` (`growth_problem` is None). Image stream, context stream and pose stream are
-    widened layer by layer; the merge's first layer reads all three, its last layer the merge.
+    `target` must be growable from `base` (`growth_problem` is None). Image stream, context stream
+    and pose stream are widened layer by layer; the merge's first layer reads all three.
     """
     with torch.no_grad():
         state = {}
-        ends: list[tuple[int, np.ndarray]] = []  # (old width, mapping) of each block the merge reads
+        ends: list[tuple[np.ndarray, int]] = []  # (mapping, old width) of each block the merge reads
         streams = [(base.image_stream, target.image_stream, "image_stream")]
         if base.context_stream is not None:
             streams.append((base.context_stream, target.context_stream, "context_stream"))
@@ -109,10 +109,10 @@ def grow(base: GQCNN, target: GQCNN, rng: np.random.Generator) -> None:
 
 
 def _grow_chain(state: dict, prefix: str, chain: list[tuple[str, nn.Module, nn.Module]], rng: np.random.Generator,
-                first_inputs: tuple[np.ndarray, int] | None = None) -> tuple[int, np.ndarray]:
+                first_inputs: tuple[np.ndarray, int] | None = None) -> tuple[np.ndarray, int]:
     """Widen a chain of layers, each reading the previous one's output, into `state` (tensors under
     the target's names); `first_inputs` maps the first layer's inputs when an earlier block grew
-    them. Returns (old width, mapping) of the chain's output. A Linear after a Conv2d reads the
+    them. Returns (mapping, old width) of the chain's output. A Linear after a Conv2d reads the
     flattened (channels, height, width) map, so its inputs grow channel by channel."""
     inputs = first_inputs
     previous_conv = False
@@ -133,6 +133,5 @@ def _grow_chain(state: dict, prefix: str, chain: list[tuple[str, nn.Module, nn.M
         state[f"{key}.bias"] = bias.index_select(0, index).clone()
         inputs = (outputs, old.weight.shape[0])
         previous_conv = isinstance(old, nn.Conv2d)
-    # the chain's last layer keeps its width where nothing reads it further (fc5: the two logits)
-    return inputs[1], inputs[0]
+    return inputs
 

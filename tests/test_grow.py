@@ -25,7 +25,9 @@ def test_the_larger_layouts_have_the_sizes_derived_in_the_module_doc():
     # * 256 + 256 = 147,712; fc5 514. Total 1,119,554.
     assert count_parameters(build_model("context-pose-wider")) == 970_752 + 576 + 147_712 + 514 == 1_119_554
     # Multiply-adds: the convolutions dominate and scale with filters squared (conv2/3), so the fc
-    # widening adds little (fc3 800 -> 512 outputs: +0.3 M a stream) and doubling filters ~3.6x.
+    # widening adds little (fc3 800 x 128 -> 800 x 512: +0.3 M a stream; the merge 288 x 128 ->
+    # 1,152 x 512: +0.55 M) while doubling the filters takes the convolutions' 5.75 M to 20.5 M
+    # (conv2 and conv3 4x, conv1 2x): 3.6x in all.
     wide = count_macs(build_model("context-pose-wide"))
     assert count_macs(build_model("context-pose-wide-fc")) < 1.25 * wide
     assert 3 * wide < count_macs(build_model("context-pose-wider")) < 4 * wide

@@ -32,8 +32,9 @@ SHARE_RANGE = (0.5, 1.5)
 enough to break the copies' symmetry, no copy's share near zero."""
 
 
-def _linear_and_convs(model: GQCNN) -> list[tuple[str, nn.Module]]:
-    """(name, layer) of every Conv2d / Linear / LocalResponseNorm in the order of `named_modules`."""
+def _layers(model: nn.Module) -> list[tuple[str, nn.Module]]:
+    """(name, layer) of every Conv2d / Linear / LocalResponseNorm, in the order of `named_modules`:
+    the layers growth copies units of, and the one kind it refuses."""
     kinds = nn.Conv2d | nn.Linear | nn.LocalResponseNorm
     return [(name, module) for name, module in model.named_modules() if isinstance(module, kinds)]
 
@@ -41,7 +42,7 @@ def _linear_and_convs(model: GQCNN) -> list[tuple[str, nn.Module]]:
 def growth_problem(base: GQCNN, target: GQCNN) -> str | None:
     """Why `target` cannot be grown from `base` (see the module doc), or None when it can: `target`
     must be `base` with every width the same or larger."""
-    base_layers, target_layers = _linear_and_convs(base), _linear_and_convs(target)
+    base_layers, target_layers = _layers(base), _layers(target)
     if any(isinstance(layer, nn.LocalResponseNorm) for _, layer in base_layers + target_layers):
         return "local response normalisation, which a copied channel would change"
     if [name for name, _ in base_layers] != [name for name, _ in target_layers]:
@@ -96,16 +97,17 @@ def grow(base: GQCNN, target: GQCNN, rng: np.random.Generator) -> None:
     with torch.no_grad():
         state = {}
         ends: list[tuple[np.ndarray, int]] = []  # (mapping, old width) of each block the merge reads
-        streams = [(base.image_stream, target.image_stream, "image_stream")]
-        if base.context_stream is not None:
-            streams.append((base.context_stream, target.context_stream, "context_stream"))
-        for old_stream, new_stream, prefix in streams:
-            ends.append(_grow_chain(state, prefix, [(name, old, new) for (name, old), (_, new) in zip(
-                _linear_and_convs(old_stream), _linear_and_convs(new_stream), strict=True)], rng))
-        ends.append(_grow_chain(state, "pose_stream", [("pc1", base.pose_stream.pc1, target.pose_stream.pc1)], rng))
-        merge = [("fc4", base.merge.fc4, target.merge.fc4), ("fc5", base.merge.fc5, target.merge.fc5)]
-        _grow_chain(state, "merge", merge, rng, first_inputs=_concat_mapping(ends))
+        context = ["context_stream"] if base.context_stream is not None else []
+        for prefix in ["image_stream", *context, "pose_stream"]:
+            ends.append(_grow_chain(state, prefix, _paired(base, target, prefix), rng))
+        _grow_chain(state, "merge", _paired(base, target, "merge"), rng, first_inputs=_concat_mapping(ends))
         target.load_state_dict(state)
+
+
+def _paired(base: GQCNN, target: GQCNN, prefix: str) -> list[tuple[str, nn.Module, nn.Module]]:
+    """(name, base layer, target layer) of the part `prefix` of both nets, in order."""
+    return [(name, old, new) for (name, old), (_, new) in zip(
+        _layers(getattr(base, prefix)), _layers(getattr(target, prefix)), strict=True)]
 
 
 def _grow_chain(state: dict, prefix: str, chain: list[tuple[str, nn.Module, nn.Module]], rng: np.random.Generator,

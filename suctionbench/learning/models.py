@@ -86,7 +86,7 @@ grown from a trained context-pose-wide (`suctionbench.learning.grow`, ``train --
 than trained from scratch: context-pose-wide-fc keeps the 32 filters and makes every fc layer 4x
 wider (image fc 512, pose fc 128, merge fc 512: 1,451,394 parameters, 7.2 M multiply-accumulates,
 most of the added size where it costs little time); context-pose-wider doubles everything (64
-filters, fc 256 / 64 / 256: 1,119,554 parameters, 21.5 M multiply-accumulates, ~3.6x the plan cost).
+filters, fc 256 / 64 / 256: 1,119,554 parameters, 21.5 M multiply-accumulates, 3.6x the wide net's).
 Measured (eval/gqcnn/README.md): the default grown into context-pose-wide-fc was level held out
 with the same training at its own size, so the wide net's fc layers are not where it underfits.
 """

@@ -215,9 +215,9 @@ def _device(name: str) -> torch.device:
     return device
 
 
-def _initial_model(config: TrainConfig) -> Any:
+def _initial_model(config: TrainConfig, network: Any) -> Any:
     """The model `config.init` names (None without one); InputError if its arch is not `config.arch`
-    and cannot grow into it (`suctionbench.learning.grow`)."""
+    and cannot grow into `network` (`config.arch`, built; `suctionbench.learning.grow`)."""
     if config.init is None:
         return None
     from suctionbench.learning.checkpoint import load_model
@@ -226,7 +226,7 @@ def _initial_model(config: TrainConfig) -> Any:
     if base.arch != config.arch:
         from suctionbench.learning.grow import growth_problem
 
-        problem = growth_problem(base.network, build_model(config.arch))
+        problem = growth_problem(base.network, network)
         if problem is not None:
             raise InputError(f"--init '{config.init}': a {base.arch} model, which cannot grow into --arch "
                              f"{config.arch} ({problem})")
@@ -465,7 +465,7 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
         raise InputError(f"output '{out_dir}': holds a training run with a different configuration or dataset "
                          f"(differs in: {changed}); use another output directory or overwrite it (--overwrite)")
 
-    base = _initial_model(config) if saved is None else None
+    base = _initial_model(config, network) if saved is None else None
     if base is not None and base.arch == config.arch:
         network.load_state_dict(base.network.state_dict())
     elif base is not None:  # a wider arch: the same function, more units (suctionbench.learning.grow)

@@ -73,6 +73,7 @@ OPTION_RULES: dict[str, Rule] = {
     # counts
     "trials": COUNT, "datapoints": COUNT, "grasps": COUNT, "grasps_per_object": COUNT, "samples": COUNT,
     "epochs": COUNT, "batch_size": Rule(1, 2**20), "max_datapoints": COUNT, "max_val_datapoints": COUNT,
+    "max_objects": COUNT,
     "count": COUNT, "scenes": COUNT, "attempts": Rule(1, 1000, meaning="attempts timed per bin size"),
     "episodes": COUNT, "memory_grasps": COUNT, "reference_datapoints": COUNT, "reference_grasps": Rule(0, COUNT_MAX),
     "top": Rule(0, COUNT_MAX, meaning="rows of the table; 0 = none"),

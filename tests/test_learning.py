@@ -351,6 +351,26 @@ def test_subset_is_seeded(dataset):
                                   np.concatenate([x.images for x in b.batches(64)]))
 
 
+def test_object_subset_keeps_whole_objects_then_thins_them(dataset):
+    # --max-objects: every kept datapoint belongs to one of N training objects, every datapoint of
+    # those objects is kept (before --max-datapoints thins them), the draw is seeded, and with both
+    # limits the count is the datapoint limit while the objects stay those N.
+    whole = SplitData(dataset, "object_wise", "train")
+    objects_of = lambda data: data.values("object_labels")  # noqa: E731
+    per_object = np.bincount(objects_of(whole))
+    a = SplitData(dataset, "object_wise", "train", max_objects=3, subset_rng=np.random.default_rng(4))
+    kept = np.unique(objects_of(a))
+    assert len(kept) == 3 and set(kept) <= set(np.unique(objects_of(whole)))
+    assert a.num_datapoints == per_object[kept].sum()
+    again = SplitData(dataset, "object_wise", "train", max_objects=3, subset_rng=np.random.default_rng(4))
+    np.testing.assert_array_equal(objects_of(again), objects_of(a))
+    thinned = SplitData(dataset, "object_wise", "train", max_objects=3, max_datapoints=40,
+                        subset_rng=np.random.default_rng(4))
+    assert thinned.num_datapoints == 40 and set(np.unique(objects_of(thinned))) <= set(kept)
+    everything = SplitData(dataset, "object_wise", "train", max_objects=10**6)
+    assert everything.num_datapoints == whole.num_datapoints
+
+
 def test_split_subset_draws_from_the_split_itself(dataset):
     # The fit check's subset: datapoints of the (possibly already subsampled) training split only,
     # the requested count of them, each once, seeded, in whole shards but the last.
@@ -837,13 +857,14 @@ def test_cli_train_and_show(dataset, tmp_path):
     out = tmp_path / "model"
     result = runner.invoke(app, ["train", "--dataset", str(dataset), "--out", str(out), "--arch", "compact",
                                  "--epochs", "1", "--seed", "3", "--no-augment", "--max-val-datapoints", "30",
-                                 "--json"])
+                                 "--max-objects", "4", "--json"])
     assert result.exit_code == 0, result.output
     trained = json.loads(result.stdout.strip().splitlines()[-1])
     assert trained["ok"] and trained["epochs"] == 1 and trained["arch"] == "compact"
     assert trained["num_val"] == 30  # the validation subset
     card = json.loads((out / CARD_NAME).read_text())
     assert "train" in card["command"] and "--seed 3" in card["command"] and "--max-val-datapoints 30" in card["command"]
+    assert "--max-objects 4" in card["command"] and card["training"]["config"]["max_train_objects"] == 4
     assert "--target binary" in card["command"] and card["label"]["target"] == "binary"  # the default, spelled out
 
     result = runner.invoke(app, ["model", "show", str(out), "--json"])

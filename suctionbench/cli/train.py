@@ -55,6 +55,7 @@ def train_command(dataset: Path | str, out: Path | str, config: Any) -> str:
         "suctionbench", "train", "--dataset", str(dataset), "--out", str(out), "--arch", config.arch, "--epochs",
         str(config.epochs), "--device", config.device, "--split", config.split, "--batch-size", str(config.batch_size),
         *(["--max-datapoints", str(config.max_train_datapoints)] if config.max_train_datapoints else []),
+        *(["--max-objects", str(config.max_train_objects)] if config.max_train_objects else []),
         *(["--max-val-datapoints", str(config.max_val_datapoints)] if config.max_val_datapoints else []),
         "--augment" if config.augment.enabled else "--no-augment",
         *(["--no-augment-noise"] if config.augment.enabled and not config.augment.noise else []),
@@ -80,6 +81,9 @@ def train_cmd(
     split: Annotated[str, typer.Option(help="Split: image_wise or object_wise.")] = "image_wise",
     batch_size: Annotated[int, typer.Option(help="Training batch size (gqcnn: 64).")] = 64,
     max_datapoints: Annotated[int | None, typer.Option(help="Train on a random subset of this many.")] = None,
+    max_objects: Annotated[int | None, typer.Option(
+        help="Train only on the datapoints of a random subset of this many training objects (before "
+             "--max-datapoints: with both, object diversity at a fixed datapoint count).")] = None,
     max_val_datapoints: Annotated[int | None, typer.Option(
         help="Validate on a random subset of this many (after every epoch).")] = None,
     augment: Annotated[bool, typer.Option(help="Noise and symmetrisation augmentation (gqcnn's).")] = True,
@@ -114,7 +118,8 @@ def train_cmd(
         checked = check_dataset(dataset)  # never train on a damaged dataset or NaN labels
 
         config = TrainConfig(arch=arch, epochs=epochs, device=device, split=split, batch_size=batch_size,
-                             max_train_datapoints=max_datapoints, max_val_datapoints=max_val_datapoints,
+                             max_train_datapoints=max_datapoints, max_train_objects=max_objects,
+                             max_val_datapoints=max_val_datapoints,
                              augment=(AUGMENT_GQCNN if augment_noise else AUGMENT_FLIPS) if augment else AUGMENT_OFF,
                              target=target, seed=seed,
                              init=init, learning_rate=learning_rate, average=average,

@@ -118,6 +118,9 @@ that read it (`suctionbench.learning.models.pose_dim_of`)."""
 METRIC_FIELD = "robust_suction_wrench_resistance"
 """Dataset field thresholded into the label."""
 
+OBJECT_FIELD = "object_labels"
+"""Dataset field with each datapoint's object (index into the card's object list)."""
+
 POSE_COLUMNS = (2, 3)
 """Columns of ``hand_poses`` the network reads: gripper depth (m), approach angle (rad)."""
 
@@ -429,15 +432,19 @@ class SplitData:
 
     Holds the dataset reader and, per shard, the local indices of the split's datapoints in it;
     `batches` streams them. `max_datapoints` keeps a random subset (drawn with `subset_rng`) for
-    quick runs. `image_channels` 2 also reads the context thumbnails (InputError if the dataset's
-    shards of the split do not store them). `load_threads` threads read a pool's shards at once
-    (hashing and decompression release the GIL): a GPU trains faster than one thread reads; the
-    pool's order, hence every batch, is the same for any count.
+    quick runs; `max_objects` first keeps only the datapoints of that many of the split's objects
+    (drawn with the same generator): a learning curve over object diversity at a fixed datapoint
+    count, which the object-wise held-out accuracy depends on. `image_channels` 2 also reads the
+    context thumbnails (InputError if the dataset's shards of the split do not store them).
+    `load_threads` threads read a pool's shards at once (hashing and decompression release the
+    GIL): a GPU trains faster than one thread reads; the pool's order, hence every batch, is the
+    same for any count.
     """
 
     def __init__(self, directory: str | Path, kind: str, part: str, *, max_datapoints: int | None = None,
                  subset_rng: np.random.Generator | None = None, reader: DatasetReader | None = None,
-                 image_channels: int = 1, object_context: bool = False, load_threads: int = 1):
+                 image_channels: int = 1, object_context: bool = False, load_threads: int = 1,
+                 max_objects: int | None = None):
         if image_channels not in (1, 2):
             raise InputError(f"image_channels {image_channels!r}: must be 1 (grasp thumbnail) or 2 (grasp, context)")
         self.reader = reader or DatasetReader(directory)
@@ -445,12 +452,14 @@ class SplitData:
         self.image_fields = IMAGE_FIELDS[:image_channels]
         self.object_context = bool(object_context)
         indices = np.unique(read_split(directory, kind, part))
-        if max_datapoints is not None and len(indices) > max_datapoints:
-            rng = subset_rng or np.random.default_rng(0)
-            indices = np.sort(rng.choice(indices, size=max_datapoints, replace=False))
+        rng = subset_rng or np.random.default_rng(0)
         dps = self.reader.datapoints_per_shard
         if self.reader.num_shards == 0 or dps is None:
             raise InputError(f"dataset '{self.reader.directory}': no complete shards")
+        if max_objects is not None:
+            indices = self._of_random_objects(indices, max_objects, rng, dps)
+        if max_datapoints is not None and len(indices) > max_datapoints:
+            indices = np.sort(rng.choice(indices, size=max_datapoints, replace=False))
         shard_of = indices // dps
         available = set(self.reader.shard_indices)
         self._local: dict[int, np.ndarray] = {}
@@ -468,6 +477,23 @@ class SplitData:
                 raise InputError(f"dataset '{self.reader.directory}': has no field '{name}' (written before "
                                  "suctionbench stored it); this network reads it: regenerate the dataset, or "
                                  "train an architecture that does not read it (dn3, compact)")
+
+    def _of_random_objects(self, indices: np.ndarray, count: int, rng: np.random.Generator, dps: int) -> np.ndarray:
+        """The `indices` (ascending) whose object is one of `count` drawn from those they hold."""
+        shard_of = indices // dps
+        labels = np.empty(len(indices), np.int64)
+        for shard in np.unique(shard_of).tolist():
+            lo, hi = np.searchsorted(shard_of, [shard, shard + 1])
+            rows = indices[lo:hi] - shard * dps
+            stored = self.reader.shard(shard, verify=False, fields=[OBJECT_FIELD])[OBJECT_FIELD]
+            if rows[-1] >= len(stored):
+                raise InputError(f"split '{self.kind}/{self.part}' of '{self.reader.directory}': refers to "
+                                 f"datapoints of shard {shard}, which is smaller (dataset incomplete?)")
+            labels[lo:hi] = stored[rows]
+        objects = np.unique(labels)
+        if len(objects) <= count:
+            return indices
+        return indices[np.isin(labels, rng.choice(objects, size=count, replace=False))]
 
     @property
     def shards(self) -> list[int]:

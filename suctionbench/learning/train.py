@@ -237,8 +237,9 @@ def _resume_key(config: TrainConfig, card: dict[str, Any], reader: DatasetReader
                 val_data: SplitData) -> dict[str, Any]:
     """What must match for a checkpoint to be resumed: the config (bar `RESUME_IGNORES`) and the data."""
     settings = {k: v for k, v in to_dict(config).items() if k not in RESUME_IGNORES}
-    if config.average is None:  # runs from before averaging existed resume as they were
-        del settings["average"]
+    for key in ("average", "max_train_objects"):  # runs from before these existed resume as they were
+        if settings[key] is None:
+            del settings[key]
     data = {"fingerprint": card.get("fingerprint"), "datapoints": reader.num_datapoints,
             "num_train": train_data.num_datapoints, "num_val": val_data.num_datapoints}
     return json_safe({"config": settings, "dataset": data})
@@ -441,6 +442,7 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
     reads = {"image_channels": channels, "object_context": pose_dim_of(config.arch) > POSE_DIM,
              "load_threads": config.load_threads}
     train_data = SplitData(dataset_dir, config.split, "train", max_datapoints=config.max_train_datapoints,
+                           max_objects=config.max_train_objects,
                            subset_rng=np.random.default_rng(seq_subset), reader=reader, **reads)
     val_data = SplitData(dataset_dir, config.split, "val", max_datapoints=config.max_val_datapoints,
                          subset_rng=np.random.default_rng(seq_val), reader=reader, **reads)

@@ -81,6 +81,11 @@ class TrainConfig:
     max_train_datapoints: int | None = None
     """Train on a random subset of at most this many training datapoints (None: all)."""
 
+    max_train_objects: int | None = None
+    """Train only on the datapoints of a seeded random subset of this many training objects (None:
+    all), drawn before `max_train_datapoints`: with both, a learning curve over object diversity at
+    a fixed datapoint count."""
+
     max_val_datapoints: int | None = None
     """Validate on a seeded random subset of at most this many validation datapoints (None: all;
     a 2.8 M-datapoint dataset's 20 % split takes minutes to score after every epoch on a CPU)."""
@@ -144,6 +149,8 @@ class TrainConfig:
             "augment": (isinstance(self.augment, AugmentConfig), "an AugmentConfig"),
             "max_train_datapoints": (self.max_train_datapoints is None or integer(self.max_train_datapoints, 1),
                                      "None or an integer >= 1"),
+            "max_train_objects": (self.max_train_objects is None or integer(self.max_train_objects, 1),
+                                  "None or an integer >= 1"),
             "max_val_datapoints": (self.max_val_datapoints is None or integer(self.max_val_datapoints, 1),
                                    "None or an integer >= 1"),
             "shuffle_shards": (integer(self.shuffle_shards, 1), "an integer >= 1"),

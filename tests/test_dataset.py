@@ -419,6 +419,25 @@ def test_a_dataset_in_the_sensors_noise_says_so_and_paper_datasets_keep_their_fi
     assert not (tmp_path / "k").exists()  # refused before anything is written
 
 
+def test_a_dataset_without_noise_is_its_sensor_twin_but_for_the_images():
+    # `--noise none` renders the same scenes and records the same grasps with the same labels as
+    # `--noise sensor` with the same seed (it makes the same draws), so an ablation of the sensor's
+    # noise changes nothing else; only the grasp and context thumbnails differ.
+    import dataclasses
+
+    record = load_object(KEYS[0])
+    config = dataclasses.replace(CONFIG, grasps_per_object=40)
+    runs = {model: gen.generate_unit(gen.Unit(0, 40), str(record.directory), "primesense",
+                                     dataclasses.replace(config, noise_model=model)) for model in ("sensor", "none")}
+    images = ("depth_ims_tf_table", "context_ims_tf_table")
+    for name, values in runs["sensor"].items():
+        if name in images:
+            assert not np.array_equal(values, runs["none"][name])
+        elif name != "object_context":  # measured on the image: the visible object's centroid and extent
+            np.testing.assert_array_equal(values, runs["none"][name], err_msg=name)
+    assert len(runs["none"]["robust_suction_wrench_resistance"]) == 40
+
+
 def test_grasps_per_image_spreads_an_objects_candidates_over_more_images():
     # With a cap, each image records at most that many of its visible candidates (distinct ones),
     # so the same quota takes more images. The cap draws which candidates, not their labels: a

@@ -377,7 +377,7 @@ def test_a_dataset_rendered_with_the_sensor_noise_gets_the_cameras_own_error():
     from suctionbench.errors import InputError
     from suctionbench.sensing.noise import NOISE_MODELS, noisy_image
 
-    assert NOISE_MODELS == ("paper", "sensor")
+    assert NOISE_MODELS == ("paper", "sensor", "none")
     depth = np.full((240, 320), 0.6, dtype=np.float32)
     sensor = noisy_image(depth, np.random.default_rng(0), "sensor") - depth
     assert abs(float(sensor.mean())) < 2e-5 and float(sensor.std()) == pytest.approx(1.276e-3, rel=0.02)
@@ -386,6 +386,22 @@ def test_a_dataset_rendered_with_the_sensor_noise_gets_the_cameras_own_error():
     assert 0.01 < float(np.std(offsets)) < 0.03  # the image-wide scale error, 19 mm expected
     with pytest.raises(InputError, match="--noise 'kinect': unknown"):
         noisy_image(depth, np.random.default_rng(0), "kinect")
+
+
+def test_no_noise_returns_the_depth_after_the_sensors_draws():
+    # "none", the ideal sensor: the rendered depth to the bit (zeros stay zero), and the generator
+    # left where "sensor" leaves it, so everything drawn after the image (the next image's noise,
+    # the grasps) is the sensor-noise dataset's: the two datasets are twins but for the noise.
+    from suctionbench.sensing.noise import noisy_image
+
+    depth = np.full((60, 80), 0.6, dtype=np.float32)
+    depth[:, :10] = 0.0
+    ideal_rng, sensor_rng = np.random.default_rng(5), np.random.default_rng(5)
+    ideal = noisy_image(depth, ideal_rng, "none")
+    sensor = noisy_image(depth, sensor_rng, "sensor")
+    np.testing.assert_array_equal(ideal, depth)
+    assert ideal.dtype == np.float32 and float(np.abs(sensor - depth).max()) > 1e-3
+    assert ideal_rng.random() == sensor_rng.random()
 
 
 def test_block_mean_thumbnails_average_independent_pixel_noise_and_keep_a_slope():

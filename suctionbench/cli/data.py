@@ -60,8 +60,9 @@ def generate(
                                             "bin per 1,000 datapoints: grasps labelled on their own object, "
                                             "0 where the gripper's path meets a neighbour or a wall).")] = "table",
     noise: Annotated[str, typer.Option(help="Image noise: paper (Dex-Net's: a ~3 % scale error and a correlated "
-                                            "~4 mm field) or sensor (the simulated camera's per-pixel noise, "
-                                            "what the benchmark's robot sees).")] = "paper",
+                                            "~4 mm field), sensor (the simulated camera's per-pixel noise, "
+                                            "what the benchmark's robot sees) or none (an ideal sensor; "
+                                            "otherwise the sensor dataset's twin).")] = "paper",
     thumbnail_sampling: Annotated[str, typer.Option(help="What a grasp thumbnail pixel holds: point (the depth at "
                                                          "its 3 x 3 block's centre, gqcnn's) or mean (the block's "
                                                          "mean depth).")] = "point",

@@ -108,7 +108,8 @@ class GenerationConfig:
     """What noise the rendered images get (`sensing.noise.NOISE_MODELS`): "paper", Dex-Net's
     y = alpha y_hat + eps (`noise`: a ~3 % scale error and a correlated ~4 mm field, an augmentation
     harsher than a calibrated sensor), or "sensor", the simulated camera's own per-pixel axial noise
-    (`sensing.noise.AxialNoiseConfig`, ~1.3 mm at 0.6 m): the images the benchmark's robot sees."""
+    (`sensing.noise.AxialNoiseConfig`, ~1.3 mm at 0.6 m): the images the benchmark's robot sees,
+    or "none" (an ideal sensor, the same seed's "sensor" dataset but for the images)."""
 
     label: LabelConfig = field(default_factory=LabelConfig.for_episode)
     """Cup, seal, perturbation and metric configuration of the labels. By default the labels the

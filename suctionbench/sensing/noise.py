@@ -318,10 +318,15 @@ def apply_axial_noise(
     return np.where(depth > 0, np.maximum(noisy, 0.0), 0.0).astype(np.float32)
 
 
-NOISE_MODELS = ("paper", "sensor")
+NOISE_MODELS = ("paper", "sensor", "none")
 """Noise a dataset's images get (`dataset.generate.GenerationConfig.noise_model`): the paper's
-model (`apply_depth_noise`, the training augmentation) or the simulated sensor's
-(`apply_axial_noise`, what the benchmark's robot sees)."""
+model (`apply_depth_noise`, the training augmentation), the simulated sensor's
+(`apply_axial_noise`, what the benchmark's robot sees), or none (an ideal sensor: how much of a
+network's error the sensor's noise causes)."""
+
+NO_AXIAL_NOISE = AxialNoiseConfig(base=0.0, quadratic=0.0)
+"""The sensor model at zero std: "none" draws what "sensor" draws and adds nothing, so a dataset
+without noise is its sensor-noise twin (same scenes, grasps and labels) but for the images."""
 
 
 def check_noise_model(name: str) -> None:
@@ -333,6 +338,9 @@ def check_noise_model(name: str) -> None:
 def noisy_image(depth: np.ndarray, rng: np.random.Generator, model: str,
                 paper: DepthNoiseConfig = DEPTH_NOISE_PAPER) -> np.ndarray:
     """A noisy copy of a rendered depth image under noise model `model` (NOISE_MODELS; "paper"
-    with the parameters `paper`), drawn from `rng`."""
+    with the parameters `paper`), drawn from `rng` ("none": the depth itself, after the draws
+    "sensor" makes)."""
     check_noise_model(model)
-    return apply_axial_noise(depth, rng) if model == "sensor" else apply_depth_noise(depth, rng, paper)
+    if model == "paper":
+        return apply_depth_noise(depth, rng, paper)
+    return apply_axial_noise(depth, rng, NO_AXIAL_NOISE if model == "none" else None)

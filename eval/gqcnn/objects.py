@@ -1,11 +1,11 @@
 """Print the object-diversity learning curve (Markdown) from the runs eval/gqcnn/objects.sh writes.
 
 Usage: python eval/gqcnn/objects.py OUT_DIR
-One row per arm (D datapoints from N training objects): held-out accuracy after every epoch (the
-same 50,000 validation datapoints of the 300 unseen objects in every arm, so arms compare paired),
+One row per arm (D datapoints from N training objects, seed S): held-out accuracy after every
+epoch (50,000 validation datapoints of the 300 unseen objects, the same in every arm of a seed),
 the last epoch's AP and fit accuracy (training datapoints scored without augmentation). Then, per
-datapoint count with two or more arms, the held-out accuracy's least-squares slope per doubling of
-the number of objects.
+datapoint count with two or more object counts, the held-out accuracy's least-squares slope per
+doubling of the number of objects (over every arm and seed of that count).
 """
 
 from __future__ import annotations
@@ -21,26 +21,26 @@ import numpy as np
 def main(out: Path) -> None:
     runs = []
     for path in out.glob("d*_n*.json"):
-        d, n = map(int, re.fullmatch(r"d(\d+)_n(\d+)", path.stem).groups())
+        d, n, seed = re.fullmatch(r"d(\d+)_n(\d+)(?:_s(\d+))?", path.stem).groups()
         history = json.loads((out / path.stem / "model.json").read_text())["history"]
-        runs.append((d, n, json.loads(path.read_text()), history))
-    runs.sort(key=lambda r: (r[0], r[1]))
-    print("| datapoints | objects | datapoints / object | held-out accuracy by epoch | AP | fit accuracy | "
+        runs.append((int(d), int(n), json.loads(path.read_text()), history, int(seed or 0)))
+    runs.sort(key=lambda r: (r[0], r[1], r[4]))
+    print("| datapoints | objects | seed | datapoints / object | held-out accuracy by epoch | AP | fit accuracy | "
           "fit - held-out |")
-    print("|---|---|---|---|---|---|---|")
-    for _, n, run, history in runs:
+    print("|---|---|---|---|---|---|---|---|")
+    for _, n, run, history, seed in runs:
         epochs = " / ".join(f"{h['val_accuracy']:.4f}" for h in history)
-        print(f"| {run['num_train']:,} | {n:,} | {run['num_train'] / n:,.0f} | {epochs} | {run['val_ap']:.4f} | "
-              f"{run['fit_accuracy']:.4f} | {run['fit_accuracy'] - run['val_accuracy']:+.4f} |")
+        print(f"| {run['num_train']:,} | {n:,} | {seed} | {run['num_train'] / n:,.0f} | {epochs} | "
+              f"{run['val_ap']:.4f} | {run['fit_accuracy']:.4f} | {run['fit_accuracy'] - run['val_accuracy']:+.4f} |")
     print()
     for d in sorted({r[0] for r in runs}):
         group = [r for r in runs if r[0] == d]
-        if len(group) < 2:
+        if len({r[1] for r in group}) < 2:
             continue
         x = np.log2([r[1] for r in group])
         y = np.array([r[2]["val_accuracy"] for r in group])
         slope = np.polyfit(x, y, 1)[0]
-        arms = ", ".join(f"{r[1]}: {r[2]['val_accuracy']:.4f}" for r in group)
+        arms = ", ".join(f"{r[1]} (seed {r[4]}): {r[2]['val_accuracy']:.4f}" for r in group)
         print(f"D = {d:,}: held-out accuracy {slope * 100:+.2f} points per doubling of the objects ({arms})")
 
 

@@ -6,8 +6,10 @@
 # 300) in every arm. Usage:
 #   eval/gqcnn/objects.sh DATASET OUT_DIR D:N[,N...] [D:N[,N...] ...]
 # e.g. eval/gqcnn/objects.sh data/sensor48_s2_1m6 runs/objects 280000:300,600,1200 560000:600,1200
-# Writes OUT_DIR/d<D>_n<N>.json (train --json; the per-epoch history is in OUT_DIR/d<D>_n<N>/model.json);
-# a finished arm (its .json) is kept. eval/gqcnn/objects.py OUT_DIR prints the table.
+# SEED=S (default 0) draws other objects, initial weights and data order: a replicate, named
+# d<D>_n<N>_s<S>. Writes OUT_DIR/<name>.json (train --json; the per-epoch history is in
+# OUT_DIR/<name>/model.json); a finished arm (its .json) is kept. eval/gqcnn/objects.py OUT_DIR
+# prints the table.
 set -euo pipefail
 DATASET=${1:?dataset directory}
 OUT=${2:?output directory}
@@ -15,16 +17,18 @@ shift 2
 EPOCHS=${EPOCHS:-4}
 MAX_VAL=${MAX_VAL:-50000}  # validation subset scored after every epoch: the same one in every arm
 SB=${SB:-suctionbench}
+SEED=${SEED:-0}
 mkdir -p "$OUT"
 for group in "$@"; do
   D=${group%%:*}
   IFS=, read -r -a counts <<< "${group#*:}"
   for N in "${counts[@]}"; do
     name="d${D}_n${N}"
+    [ "$SEED" != 0 ] && name="${name}_s${SEED}"
     [ -f "$OUT/$name.json" ] && continue
     $SB train --dataset "$DATASET" --out "$OUT/$name" --arch context-pose-wide --epochs "$EPOCHS" --device cpu \
       --split object_wise --batch-size 64 --max-objects "$N" --max-datapoints "$D" --max-val-datapoints "$MAX_VAL" \
-      --augment --no-augment-noise --target soft --seed 0 --average 0.9995 --load-threads 1 --json \
+      --augment --no-augment-noise --target soft --seed "$SEED" --average 0.9995 --load-threads 1 --json \
       | tail -n 1 > "$OUT/$name.json.tmp"
     mv "$OUT/$name.json.tmp" "$OUT/$name.json"
   done

@@ -15,7 +15,7 @@ DATASET=${1:?dataset directory}
 OUT=${2:?output directory}
 shift 2
 EPOCHS=${EPOCHS:-4}
-MAX_VAL=${MAX_VAL:-50000}  # validation subset scored after every epoch: the same one in every arm
+MAX_VAL=${MAX_VAL:-50000}  # validation subset scored after every epoch: the same one in every arm of a seed
 SB=${SB:-suctionbench}
 SEED=${SEED:-0}
 mkdir -p "$OUT"

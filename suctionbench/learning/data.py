@@ -427,6 +427,16 @@ def _load_ahead(load: Callable[[Any], Any], keys: list[Any]) -> Iterator[Any]:
             thread.join(timeout=0.01)
 
 
+def _of_random_objects(indices: np.ndarray, objects_of: np.ndarray, count: int,
+                       rng: np.random.Generator) -> np.ndarray:
+    """The `indices` whose object (`objects_of`, aligned with them) is one of `count` drawn from
+    those they hold (all of them when they hold no more)."""
+    objects = np.unique(objects_of)
+    if len(objects) <= count:
+        return indices
+    return indices[np.isin(objects_of, rng.choice(objects, size=count, replace=False))]
+
+
 class SplitData:
     """One side of a dataset split (e.g. image-wise train), read shard by shard.
 
@@ -453,23 +463,14 @@ class SplitData:
         self.object_context = bool(object_context)
         indices = np.unique(read_split(directory, kind, part))
         rng = subset_rng or np.random.default_rng(0)
-        dps = self.reader.datapoints_per_shard
-        if self.reader.num_shards == 0 or dps is None:
+        if self.reader.num_shards == 0 or self.reader.datapoints_per_shard is None:
             raise InputError(f"dataset '{self.reader.directory}': no complete shards")
         if max_objects is not None:
-            indices = self._of_random_objects(indices, max_objects, rng, dps)
+            self._local = self._by_shard(indices)  # so `values` reads the split's objects
+            indices = _of_random_objects(indices, self.values(OBJECT_FIELD), max_objects, rng)
         if max_datapoints is not None and len(indices) > max_datapoints:
             indices = np.sort(rng.choice(indices, size=max_datapoints, replace=False))
-        shard_of = indices // dps
-        available = set(self.reader.shard_indices)
-        self._local: dict[int, np.ndarray] = {}
-        for shard in np.unique(shard_of).tolist():
-            lo, hi = np.searchsorted(shard_of, [shard, shard + 1])
-            local = indices[lo:hi] - shard * dps
-            if shard not in available or local[-1] >= self.reader.shard_size(shard):
-                raise InputError(f"split '{kind}/{part}' of '{self.reader.directory}': refers to datapoints of "
-                                 f"shard {shard}, which is missing or smaller (dataset incomplete?)")
-            self._local[shard] = local.astype(np.int64)
+        self._local = self._by_shard(indices)
         self.num_datapoints = int(len(indices))
         self.load_threads = max(1, int(load_threads))
         for name in [*self.image_fields, *([OBJECT_CONTEXT_FIELD] if self.object_context else [])]:
@@ -478,22 +479,21 @@ class SplitData:
                                  "suctionbench stored it); this network reads it: regenerate the dataset, or "
                                  "train an architecture that does not read it (dn3, compact)")
 
-    def _of_random_objects(self, indices: np.ndarray, count: int, rng: np.random.Generator, dps: int) -> np.ndarray:
-        """The `indices` (ascending) whose object is one of `count` drawn from those they hold."""
+    def _by_shard(self, indices: np.ndarray) -> dict[int, np.ndarray]:
+        """Ascending global `indices` as {shard: its local rows}; InputError if a shard they refer
+        to is missing or smaller."""
+        dps = self.reader.datapoints_per_shard
         shard_of = indices // dps
-        labels = np.empty(len(indices), np.int64)
+        available = set(self.reader.shard_indices)
+        local_rows: dict[int, np.ndarray] = {}
         for shard in np.unique(shard_of).tolist():
             lo, hi = np.searchsorted(shard_of, [shard, shard + 1])
-            rows = indices[lo:hi] - shard * dps
-            stored = self.reader.shard(shard, verify=False, fields=[OBJECT_FIELD])[OBJECT_FIELD]
-            if rows[-1] >= len(stored):
+            local = indices[lo:hi] - shard * dps
+            if shard not in available or local[-1] >= self.reader.shard_size(shard):
                 raise InputError(f"split '{self.kind}/{self.part}' of '{self.reader.directory}': refers to "
-                                 f"datapoints of shard {shard}, which is smaller (dataset incomplete?)")
-            labels[lo:hi] = stored[rows]
-        objects = np.unique(labels)
-        if len(objects) <= count:
-            return indices
-        return indices[np.isin(labels, rng.choice(objects, size=count, replace=False))]
+                                 f"datapoints of shard {shard}, which is missing or smaller (dataset incomplete?)")
+            local_rows[shard] = local.astype(np.int64)
+        return local_rows
 
     @property
     def shards(self) -> list[int]:

@@ -336,7 +336,8 @@ def cases(p: dict[str, Path]) -> list[Case]:
     add("generate", *g, "--datapoints", "4", "--out", p["file.txt"])
     add("generate", *g, "--datapoints", "4", "--out", p["file.txt"] / "ds")
     add("generate", "generate", "--objects", "nope", "--datapoints", "4", "--out", r / "gen_nope")
-    for name in ("ds_no_splits", "ds_empty_card", "ds_bad_card", "ds_no_card", "file.txt", "a_dir"):
+    for name in ("ds_no_splits", "ds_empty_card", "ds_bad_card", "ds_no_card", "file.txt", "a_dir", "model_good",
+                 "model_bad_card"):
         add("generate", *g, "--datapoints", "4", "--holdout-like", p[name], "--out", r / f"gen_holdout_{name}")
     for name in ("cam_huge.toml", "cam_1px.toml", "cam_tiny_f.toml", "cam_far.toml", "cam_binary.toml"):
         add("generate", *g, "--datapoints", "4", "--camera", p[name], "--out", r / f"gen_{name}")

@@ -205,6 +205,44 @@ def test_holdout_like_holds_out_the_other_datasets_objects(reference, tmp_path):
                              holdout_like=tmp_path)
 
 
+def test_holdout_like_a_model_holds_out_what_it_never_trained_on(reference, tmp_path):
+    # A model trained object-wise records its held-out objects by key, so new data can hold out the
+    # same ones with only the model at hand (the dataset it came from may be gone); a model that
+    # records none (image-wise) is refused before anything is written.
+    from suctionbench.learning.train import train
+    from suctionbench.learning.train_config import TrainConfig
+
+    model = tmp_path / "model"
+    train(reference, model, TrainConfig(arch="compact", epochs=1, batch_size=16, split="object_wise"))
+    card = json.loads((model / "model.json").read_text())
+    assert card["dataset"]["held_out_objects"] == held_out_keys(reference)
+    other = gen.GenerationConfig(datapoints=150, seed=4, grasps_per_object=40, stable_poses=2, datapoints_per_shard=64)
+    dirs = [str(load_object(k).directory) for k in KEYS]
+    made = gen.generate_dataset(tmp_path / "second", dirs, KEYS, "primesense", other, holdout_like=model)
+    assert held_out_keys(tmp_path / "second") == held_out_keys(reference)
+    assert made["holdout_like"]["fingerprint"] == read_card(reference)["fingerprint"]
+    image_wise = tmp_path / "image_wise"
+    train(reference, image_wise, TrainConfig(arch="compact", epochs=1, batch_size=16, split="image_wise"))
+    assert json.loads((image_wise / "model.json").read_text())["dataset"]["held_out_objects"] is None
+    with pytest.raises(InputError, match=r"--holdout-like .*lists no held-out objects"):
+        gen.generate_dataset(tmp_path / "third", dirs, KEYS, "primesense", other, holdout_like=image_wise)
+    assert not (tmp_path / "third").exists()
+
+
+def test_the_shipped_default_names_the_objects_it_held_out(tmp_path):
+    # The default's 300 held-out objects (a fifth of the 1,500-object corpus) are recorded by key,
+    # so `--holdout-like` reads them from the model; objects of another corpus are refused.
+    from suctionbench.learning.checkpoint import read_model_card
+    from suctionbench.policies.gqcnn import default_model_dir
+
+    keys = read_model_card(default_model_dir())["dataset"]["held_out_objects"]
+    assert len(keys) == len(set(keys)) == 300 and all(k.startswith("train/train_") for k in keys)
+    with pytest.raises(InputError, match=r"--holdout-like .*300 of its held-out objects are not among --objects"):
+        gen.generate_dataset(tmp_path / "basic", [str(load_object(k).directory) for k in KEYS], KEYS, "primesense",
+                             CONFIG, holdout_like=default_model_dir())
+    assert not (tmp_path / "basic").exists()
+
+
 def test_labels_agree_with_the_labeller(reference):
     # Unit u draws its candidates first from its own stream (seed, u) and labels them in stable
     # pose s with gravity rotated into that pose; labelling the same grasps directly must give

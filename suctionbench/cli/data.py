@@ -76,9 +76,10 @@ def generate(
                                                        "grasps on every image too (on-policy data).")] = None,
     proposals_per_image: Annotated[int, typer.Option(help="With --proposals: the policy's best grasps per image "
                                                           "(at least 1 cm apart).")] = 8,
-    holdout_like: Annotated[Path | None, typer.Option(help="Another dataset of the same objects: hold out its "
-                                                          "held-out objects (object-wise split) rather than draw "
-                                                          "new ones, so both can train one model.")] = None,
+    holdout_like: Annotated[Path | None, typer.Option(help="Another dataset of the same objects, or a model "
+                                                          "trained on one: hold out its held-out objects "
+                                                          "(object-wise split) rather than draw new ones, so both "
+                                                          "can train one model.")] = None,
     resume: Annotated[bool, typer.Option(help="Continue an interrupted run with the same configuration.")] = False,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing dataset.")] = False,
     seed: SeedOpt = 0,

@@ -416,9 +416,10 @@ def generate_dataset(
 ) -> dict[str, Any]:
     """Generate (or resume) a dataset in `out`; returns its card.
 
-    With `holdout_like` (another dataset of the same objects) the object-wise split holds out that
-    dataset's held-out objects instead of drawing its own (`storage.write_splits`), so the two
-    datasets train one model without leaking a validation object; the card records it.
+    With `holdout_like` (another dataset of the same objects, or a model trained on one) the
+    object-wise split holds out that dataset's held-out objects instead of drawing its own
+    (`storage.write_splits`), so the two datasets train one model without leaking a validation
+    object; the card records it.
 
     On resume, finished units are reused after checking them (a corrupt unit is reported and
     generated again) and every shard is rebuilt from the units, so a damaged shard is never
@@ -428,7 +429,6 @@ def generate_dataset(
     from suctionbench.dataset.storage import (
         DatasetReader,
         DatasetWriter,
-        held_out_keys,
         read_card,
         write_card,
         write_splits,
@@ -455,7 +455,7 @@ def generate_dataset(
     if holdout_like is not None:  # read and checked before anything is written
         if Path(holdout_like).resolve() == out.resolve():
             raise InputError(f"--holdout-like '{holdout_like}': is --out itself")
-        keys = held_out_keys(holdout_like)
+        keys, source_fingerprint = _holdout_source(Path(holdout_like))
         index = {key: i for i, key in enumerate(object_keys)}
         unknown = [key for key in keys if key not in index]
         if unknown:
@@ -521,13 +521,32 @@ def generate_dataset(
                  held_out_objects=held_out)
     if holdout_like is not None:
         card["holdout_like"] = {"dataset": str(Path(holdout_like).resolve()), "objects": len(held_out),
-                                "fingerprint": read_card(holdout_like).get("fingerprint")}
+                                "fingerprint": source_fingerprint}
     stats["short_units"] = short_units(units, stats.pop("unit_datapoints"), object_keys, config.scene)
     this_run["assembly_seconds"] = round(time.perf_counter() - assemble, 1)
     card.update(stats, status="complete", regenerated_corrupt_units=corrupt, rewritten_shard_problems=shard_problems,
                 generation=_generation_summary(runs, len(units), out, stats["datapoints"]))
     write_card(out, card, datapoints_per_shard=config.datapoints_per_shard)
     return card
+
+
+def _holdout_source(path: Path) -> tuple[list[str], str | None]:
+    """The keys of the objects `--holdout-like` names as held out, sorted, and the fingerprint of
+    the dataset they were held out of: `path` is a finished dataset (its object-wise val objects)
+    or a trained model (the held-out objects its card records, so the GB-sized dataset it came
+    from need not be kept). InputError if it is neither or records none."""
+    from suctionbench.dataset.storage import held_out_keys, read_card
+    from suctionbench.learning.checkpoint import CARD_NAME, read_model_card
+
+    if (path / CARD_NAME).is_file():
+        data = read_model_card(path).get("dataset")
+        data = data if isinstance(data, dict) else {}
+        keys = data.get("held_out_objects")
+        if not isinstance(keys, list) or not keys or not all(isinstance(k, str) and k for k in keys):
+            raise InputError(f"--holdout-like '{path}': a model whose card lists no held-out objects (trained on an "
+                             "image-wise split, or before suctionbench recorded them)")
+        return sorted(set(keys)), data.get("fingerprint")
+    return held_out_keys(path), read_card(path).get("fingerprint")
 
 
 def short_units(units: list[Unit], held: list[int], object_keys: list[str], scene: str) -> list[dict[str, Any]]:

@@ -51,7 +51,7 @@ import torch
 import torch.nn.functional as F
 
 from suctionbench.config import to_dict
-from suctionbench.dataset.storage import DatasetReader, read_card
+from suctionbench.dataset.storage import DatasetReader, held_out_keys, read_card
 from suctionbench.errors import InputError
 from suctionbench.learning.checkpoint import (
     CARD_NAME,
@@ -271,7 +271,19 @@ def _dataset_summary(directory: Path, card: dict[str, Any], split: str, train_da
         "objects": len(card.get("objects", [])) if isinstance(card.get("objects"), list) else None,
         "split": split, "num_train": train_data.num_datapoints, "num_val": val_data.num_datapoints,
         "suctionbench_version": card.get("suctionbench_version"),
+        # the objects it never trained on, by key: `generate --holdout-like MODEL` holds out the same
+        # ones in new data without the (GB-sized) dataset the model came from
+        "held_out_objects": _held_out_objects(directory, card, split),
+        "holdout_like": card.get("holdout_like"),  # the dataset (fingerprint) whose held-out objects it kept
     }
+
+
+def _held_out_objects(directory: Path, card: dict[str, Any], split: str) -> list[str] | None:
+    """The keys of the objects an object-wise split holds out, for the model card; None for an
+    image-wise split or a dataset whose card names no objects (a synthetic or imported one)."""
+    if split != "object_wise" or not isinstance(card.get("objects"), list) or not card["objects"]:
+        return None
+    return held_out_keys(directory, f"--dataset '{directory}'")
 
 
 def _autocast(device: torch.device):

@@ -13,12 +13,11 @@ card that already lists other objects is refused.
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
 from suctionbench.dataset.storage import held_out_keys, read_card
-from suctionbench.learning.checkpoint import CARD_NAME, read_model_card
+from suctionbench.learning.checkpoint import read_model_card, write_model_card
 
 
 def record(dataset: Path, models: list[Path]) -> None:
@@ -33,10 +32,7 @@ def record(dataset: Path, models: list[Path]) -> None:
             sys.exit(f"model '{model}': its card already lists other held-out objects")
         data["held_out_objects"] = keys
         data.setdefault("held_out_from", fingerprint)  # the dataset the keys were read from
-        path = Path(model) / CARD_NAME
-        tmp = path.with_suffix(".json.tmp")
-        tmp.write_text(json.dumps(card, indent=2) + "\n")
-        tmp.replace(path)
+        write_model_card(model, card)
         print(f"{model}: {len(keys)} held-out objects (dataset {fingerprint}; its own {data.get('fingerprint')})")
 
 

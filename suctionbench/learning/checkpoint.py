@@ -168,11 +168,18 @@ def save_model(directory: str | Path, model: GQCNNModel) -> Path:
     card.update(format=CARD_FORMAT, normalisation=model.stats.to_dict(), weights=WEIGHTS_NAME,
                 weights_sha256=file_digest(weights)[0])
     card["image_channels"] = model.image_channels  # cards without it (made before the context nets): 1
+    path = write_model_card(directory, card)
+    model.card = card
+    return path
+
+
+def write_model_card(directory: str | Path, card: dict[str, Any]) -> Path:
+    """Write `card` as `directory`'s ``model.json`` (atomically: a reader never sees half a card);
+    returns its path. `save_model` writes the whole model; this alone amends a card's facts."""
     text = json.dumps(json_safe(card), indent=2, allow_nan=False) + "\n"
-    path = directory / CARD_NAME
+    path = Path(directory) / CARD_NAME
     with atomic_path(path) as tmp:
         tmp.write_text(text)
-    model.card = card
     return path
 
 

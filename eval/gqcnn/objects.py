@@ -15,40 +15,52 @@ import json
 import re
 import sys
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
 
+class Arm(NamedTuple):
+    """One finished arm: D datapoints from N objects, its train --json line and per-epoch history."""
+
+    fine_tuned: bool
+    datapoints: int
+    objects: int
+    seed: int
+    run: dict
+    history: list[dict]
+
+
 def main(out: Path) -> None:
-    runs = []
+    arms = []
     for path in out.glob("*d*_n*.json"):
         match = re.fullmatch(r"(init_)?d(\d+)_n(\d+)(?:_s(\d+))?", path.stem)
         if match is None:
             continue
         init, d, n, seed = match.groups()
         history = json.loads((out / path.stem / "model.json").read_text())["history"]
-        runs.append((int(d), int(n), json.loads(path.read_text()), history, int(seed or 0), bool(init)))
-    runs.sort(key=lambda r: (r[5], r[0], r[1], r[4]))
+        arms.append(Arm(bool(init), int(d), int(n), int(seed or 0), json.loads(path.read_text()), history))
+    arms.sort(key=lambda a: (a.fine_tuned, a.datapoints, a.objects, a.seed))
     print("| start | datapoints | objects | seed | datapoints / object | held-out accuracy by epoch | AP | "
           "fit accuracy | fit - held-out |")
     print("|---|---|---|---|---|---|---|---|---|")
-    for _, n, run, history, seed, init in runs:
-        epochs = " / ".join(f"{h['val_accuracy']:.4f}" for h in history)
-        start = "fine-tuned" if init else "scratch"
-        print(f"| {start} | {run['num_train']:,} | {n:,} | {seed} | {run['num_train'] / n:,.0f} | {epochs} | "
-              f"{run['val_ap']:.4f} | {run['fit_accuracy']:.4f} | {run['fit_accuracy'] - run['val_accuracy']:+.4f} |")
+    for a in arms:
+        epochs = " / ".join(f"{h['val_accuracy']:.4f}" for h in a.history)
+        run = a.run
+        print(f"| {'fine-tuned' if a.fine_tuned else 'scratch'} | {run['num_train']:,} | {a.objects:,} | {a.seed} | "
+              f"{run['num_train'] / a.objects:,.0f} | {epochs} | {run['val_ap']:.4f} | {run['fit_accuracy']:.4f} | "
+              f"{run['fit_accuracy'] - run['val_accuracy']:+.4f} |")
     print()
-    for init, d in sorted({(r[5], r[0]) for r in runs}):
-        group = [r for r in runs if r[0] == d and r[5] == init]
-        if len({r[1] for r in group}) < 2:
+    for fine_tuned, d in sorted({(a.fine_tuned, a.datapoints) for a in arms}):
+        group = [a for a in arms if (a.fine_tuned, a.datapoints) == (fine_tuned, d)]
+        if len({a.objects for a in group}) < 2:
             continue
-        x = np.log2([r[1] for r in group])
-        y = np.array([r[2]["val_accuracy"] for r in group])
+        x = np.log2([a.objects for a in group])
+        y = np.array([a.run["val_accuracy"] for a in group])
         slope = np.polyfit(x, y, 1)[0]
-        arms = ", ".join(f"{r[1]} (seed {r[4]}): {r[2]['val_accuracy']:.4f}" for r in group)
-        start = "fine-tuned, " if init else ""
-        print(f"{start}D = {d:,}: held-out accuracy {slope * 100:+.2f} points per doubling of the objects ({arms})")
-
+        listed = ", ".join(f"{a.objects} (seed {a.seed}): {a.run['val_accuracy']:.4f}" for a in group)
+        start = "fine-tuned, " if fine_tuned else ""
+        print(f"{start}D = {d:,}: held-out accuracy {slope * 100:+.2f} points per doubling of the objects ({listed})")
 
 if __name__ == "__main__":
     if len(sys.argv) != 2 or not Path(sys.argv[1]).is_dir():

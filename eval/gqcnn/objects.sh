@@ -8,9 +8,9 @@
 # e.g. eval/gqcnn/objects.sh data/sensor48_s2_1m6 runs/objects 280000:300,600,1200 560000:600,1200
 # SEED=S (default 0) draws other objects, initial weights and data order: a replicate, named
 # d<D>_n<N>_s<S>. INIT=MODEL fine-tunes MODEL instead of training from scratch (train --init, its
-# schedule restarting at gqcnn's rate): arms named init_d<D>_n<N>[_s<S>]. Writes OUT_DIR/<name>.json (train --json; the per-epoch history is in
-# OUT_DIR/<name>/model.json); a finished arm (its .json) is kept. eval/gqcnn/objects.py OUT_DIR
-# prints the table.
+# schedule restarting at gqcnn's rate): arms named init_d<D>_n<N>[_s<S>]. Writes OUT_DIR/<name>.json
+# (train --json; the per-epoch history is in OUT_DIR/<name>/model.json); a finished arm (its .json)
+# is kept. eval/gqcnn/objects.py OUT_DIR prints the table.
 set -euo pipefail
 DATASET=${1:?dataset directory}
 OUT=${2:?output directory}

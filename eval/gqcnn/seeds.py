@@ -35,13 +35,14 @@ def collect(runs: Path) -> dict[tuple[str, str], dict[int, Path]]:
     return found
 
 
-def run_ap(run: Path) -> float | None:
-    """The run's AP as its `eval --json` line (seeds.sh: RUN.json beside it) gives it."""
+def run_figure(run: Path, key: str = "ap") -> float | None:
+    """One figure of the run (`key`: its AP by default) as its `eval --json` line (seeds.sh: RUN.json
+    beside it) gives it; None when the line or the figure is missing."""
     line = run.with_suffix(".json")
     if not line.is_file():
         return None
-    ap = json.loads(line.read_text()).get("ap")
-    return None if ap is None else float(ap)
+    value = json.loads(line.read_text()).get(key)
+    return None if value is None else float(value)
 
 
 def main(runs: Path, base: str | None) -> None:
@@ -65,7 +66,7 @@ def main(runs: Path, base: str | None) -> None:
                 only_base += sum(ref[i][1] and not result[i][1] for i in shared)
                 only_run += sum(result[i][1] and not ref[i][1] for i in shared)
         rate = wins / trials
-        aps = [ap for ap in (run_ap(r) for r in seeds.values()) if ap is not None]
+        aps = [ap for ap in (run_figure(r) for r in seeds.values()) if ap is not None]
         mean_ap = f"{100 * sum(aps) / len(aps):.1f}" if aps else "-"
         paired = "-" if name == base else f"{only_base} / {only_run}"
         p = "-" if name == base else f"{mcnemar_p(only_base, only_run):.3f}"

@@ -17,7 +17,7 @@ from suctionbench.runlog.reader import read_run
 from suctionbench.sim.episode_config import FAILURES
 
 POLICIES = ["random", "centroid", "planarity", "planarity-centroid", "gqcnn", "fc-gqcnn", "gqcnn-adv", "fc-gqcnn-adv",
-            "analytic", "random-surface"]
+            "analytic", "analytic-image", "random-surface"]
 """Every built-in policy: CI's one real pick each (`test_smoke_list_covers_every_policy` keeps it complete)."""
 
 
@@ -93,6 +93,7 @@ def test_one_real_pick_per_policy(policy):
         (["--policy", "centroid", "--set", "basic", "--engine", "spark"], "spark"),
         (["--policy", "centroid", "--set", "basic", "--cup", "huge"], "huge"),
         (["--policy", "analytic", "--set", "basic", "--metric", "nope"], "nope"),
+        (["--policy", "analytic-image", "--task", "bin-basic"], "single-object"),
     ],
 )
 def test_eval_bad_input_exits_2(tmp_path, args, needle):

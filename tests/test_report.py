@@ -92,6 +92,20 @@ def test_known_objects_tables_from_logs(tmp_path):
     assert "Known objects: random-grasp classification" in (tmp_path / "report" / "report.md").read_text()
 
 
+def test_the_image_bound_is_a_known_state_row(tmp_path):
+    # analytic-image ranks the image's grasps in the true state: a row of the known-objects table
+    # named by its metric and where its grasps came from, not a policy of the novel-objects tables.
+    bound = _synthetic_run(tmp_path / "img", "analytic-image", "rwr", [
+        {"success": s, "policy_q": q} for s, q in ((True, 0.9), (False, 0.2), (False, 0.8), (True, 0.1))])
+    report = build_report([bound], tmp_path / "report")
+    (row,) = report["tables"]["Known objects: top-ranked grasp per 3D metric"]
+    # q ranks success, failure, failure, success: AP = (1/1 + 2/4) / 2 = 0.75; no paper figure
+    assert (row["metric"], row["AP %"], row["success %"]) == ("rwr of the image's grasps", 75.0, 50.0)
+    assert row["paper AP / success %"] == "-" and "Novel objects: policies x sets" not in report["tables"]
+    timing = report["tables"]["The pick cycle (means per trial)"]
+    assert [r["run"] for r in timing] == ["analytic-image-rwr / adversarial"]
+
+
 def test_runs_of_several_seeds_are_pooled(tmp_path):
     # Seed 0: q ranks successes 1st, 2nd and 4th -> step-wise AP (1 + 1 + 3/4) / 3 = 0.9167, 3/4
     # successes; seed 1: the one success ranked 2nd -> AP 1/2, 1/4. Pooled: 4 of 8 = 50 %, binomial

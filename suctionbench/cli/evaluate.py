@@ -25,7 +25,7 @@ from suctionbench.errors import InputError
 def eval_cmd(
     policy: Annotated[
         str, typer.Option(help="Policy: gqcnn, planarity-centroid, centroid, planarity, random, analytic, "
-                               "random-surface, an installed plug-in's name, PATH.py:FACTORY or "
+                               "analytic-image, random-surface, an installed plug-in's name, PATH.py:FACTORY or "
                                "package.module:FACTORY.")
     ],
     out: Annotated[Path, typer.Option(help="Run directory (trials/*.mcap, run.json).")],

@@ -81,6 +81,9 @@ def run_bin_eval(task: BinTask, policy: str, out: Path, *, model: str | None = N
 
     if masks not in MASK_SOURCES:
         raise InputError(f"--masks '{masks}': expected one of {', '.join(MASK_SOURCES)}")
+    if policy == "analytic-image":
+        raise InputError("--policy analytic-image: single-object tasks only (it ranks the grasps the image "
+                         "offers on the one object whose state it knows)")
     cup_config = cup_preset(cup)
     resolve_camera(camera)  # a bad camera fails before any work
     policy_config = built_policy_config(policy, policy_args or {}, model)  # bad options fail before any work

@@ -49,9 +49,9 @@ DEFAULT_PLANNING_S = PLANNING_S["gqcnn"]
 policy's (the GQ-CNN's)."""
 
 KNOWN_STATE_PLANNING_S = 0.0
-"""The known-state policies (analytic, random-surface) are oracles that read the true object state
-instead of an image: no sensing and no planning time, so their picks per hour is what the motion
-alone allows."""
+"""The known-state policies are oracles that read the true object state: no planning time, and for
+analytic and random-surface (which read no image) no sensing either, so their picks per hour is
+what the motion alone allows (analytic-image adds the camera's frame)."""
 
 
 @dataclass(frozen=True)
@@ -71,6 +71,8 @@ class CycleModel:
         """{"sensing_s", "planning_s"} of one attempt of `policy` (a registry name or a user spec)."""
         if policy in ("analytic", "random-surface"):
             return {"sensing_s": 0.0, "planning_s": KNOWN_STATE_PLANNING_S}
+        if policy == "analytic-image":  # an image is taken; the ranking itself is the oracle's
+            return {"sensing_s": self.sensing_s, "planning_s": KNOWN_STATE_PLANNING_S}
         from suctionbench.policies.base import ADV_VARIANTS
         from suctionbench.policies.plugins import builtin_name
 

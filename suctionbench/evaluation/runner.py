@@ -397,7 +397,9 @@ def summarize_run(run_dir: Path, records: list[dict[str, Any]] | None = None) ->
     if records is None:
         records = run_records(run_dir)
     status = run_status(run_dir, run)
-    label = f"{run['policy']}-{run.get('metric')}" if run["policy"] == "analytic" else run["policy"]
+    from suctionbench.sim.pick import RANKING_POLICIES
+
+    label = f"{run['policy']}-{run.get('metric')}" if run["policy"] in RANKING_POLICIES else run["policy"]
     return {"policy": run["policy"], "label": label, "task": run["task"]["name"], "set": run["task"]["set"],
             "metric": run.get("metric"), "seed": run.get("seed"), **trial_metrics(records, modelled_compute(run)),
             "complete": status["complete"], "expected_trials": status["expected_trials"]}

@@ -26,8 +26,13 @@ from suctionbench.sim.episode import PickEpisode
 from suctionbench.sim.episode_config import EpisodeConfig, EpisodeResult
 from suctionbench.sim.scene import SceneConfig, build_scene
 
-KNOWN_STATE_POLICIES = ("analytic", "random-surface")
-"""Policies that see the true object state: rank surface grasps by RWR, or draw one uniformly."""
+KNOWN_STATE_POLICIES = ("analytic", "analytic-image", "random-surface")
+"""Policies that see the true object state: rank surface grasps by a 3D metric (the known-state
+upper bound), rank the grasps the depth image offers the image policies by it (that bound over
+what the camera sees: `policies.analytic`), or draw one surface grasp uniformly."""
+
+RANKING_POLICIES = ("analytic", "analytic-image")
+"""The known-state policies that rank by `PickRequest.metric` (their runs are named by it)."""
 
 NO_LABELS: dict[str, Any] = dict.fromkeys(("label_seal", "label_seal_failure", "label_wr", "label_rwr",
                                            "label_scores"))
@@ -51,7 +56,7 @@ class PickRequest:
     """Grasp (x, y, z, vx, vy, vz) in the object's own frame; None: use `policy`."""
 
     policy: str = "analytic"
-    """Policy choosing the grasp when none is given (known-state: 'analytic'), or any policy spec
+    """Policy choosing the grasp when none is given (known-state: `KNOWN_STATE_POLICIES`), or any policy spec
     `suctionbench.policies.plugins` loads (a plug-in name, PATH.py:FACTORY, package.module:FACTORY)."""
 
     policy_args: dict[str, Any] = field(default_factory=dict)
@@ -216,6 +221,8 @@ class PickRunner:
 
                 if req.policy == "analytic":
                     chosen = analytic_grasp(mesh, com, self.record.mass, req.cup, req.seed, metric=req.metric)
+                elif req.policy == "analytic-image":
+                    chosen = self._rank_image_candidates(mesh, com)
                 else:
                     chosen = random_surface_grasp(mesh, req.seed)
             else:
@@ -290,6 +297,18 @@ class PickRunner:
         from suctionbench.sensing.camera import body_image
 
         return body_image(self.scene.model, segmentation) == self.episode.object
+
+    def _rank_image_candidates(self, mesh: Any, com: np.ndarray) -> Any:
+        """`analytic-image`: the grasps an image policy could choose from (drawn as the image
+        policies draw theirs, from the same generator), ranked in the true state."""
+        from suctionbench.policies.analytic import CANDIDATES, image_candidates, rank_grasps
+
+        req = self.request
+        start = time.perf_counter()
+        self.observation = self.observe()
+        self._sensing_time = time.perf_counter() - start
+        points, approaches = image_candidates(self.observation, CANDIDATES, np.random.default_rng((req.seed, 3)))
+        return rank_grasps(mesh, com, self.record.mass, req.cup, req.seed, points, approaches, metric=req.metric)
 
     def _plan_from_image(self) -> Any:
         """Run an image policy from the registry on the current observation (world-frame result)."""

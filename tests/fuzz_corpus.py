@@ -361,7 +361,8 @@ def cases(p: dict[str, Path]) -> list[Case]:
     for opt, v in (("--epochs", "0"), ("--epochs", "-1"), ("--batch-size", "0"), ("--max-datapoints", "0"),
                    ("--max-datapoints", "-5"), ("--seed", "-1"), ("--device", "tpu"), ("--arch", "huge"),
                    ("--split", "random"), ("--batch-size", "1000000000000"), ("--learning-rate", "0"),
-                   ("--learning-rate", "inf"), ("--max-objects", "0"), ("--max-objects", "-2")):
+                   ("--learning-rate", "inf"), ("--max-objects", "0"), ("--max-objects", "-2"),
+                   ("--train-objects", "*household*"), ("--train-objects", "")):
         add("train", *t, "--dataset", p["ds_good"], opt, v, "--out", r / f"train_{opt[2:]}_{v}")
     add("train", *t, "--dataset", p["ds_good"], "--out", p["file.txt"])
 

@@ -371,6 +371,27 @@ def test_object_subset_keeps_whole_objects_then_thins_them(dataset):
     assert everything.num_datapoints == whole.num_datapoints
 
 
+def test_object_pattern_keeps_the_matching_objects_only(dataset, tmp_path):
+    # --train-objects: the datapoints kept are exactly those of the objects whose card key matches
+    # the shell pattern (here every second object is a "household" one); a pattern that matches no
+    # object, or a dataset whose card names none, is an InputError naming the option.
+    named = tmp_path / "named"
+    shutil.copytree(dataset, named)
+    card = json.loads((named / "config.json").read_text())
+    count = N_SYNTH // 32
+    card["objects"] = [f"train/train_{i:05d}_{'household' if i % 2 == 0 else 'blob'}" for i in range(count)]
+    (named / "config.json").write_text(json.dumps(card))
+    whole = SplitData(named, "object_wise", "train")
+    labels = whole.values("object_labels")
+    kept = SplitData(named, "object_wise", "train", objects_matching="*household*")
+    assert set(np.unique(kept.values("object_labels"))) == {i for i in np.unique(labels) if i % 2 == 0}
+    assert kept.num_datapoints == int(np.sum(labels % 2 == 0))
+    with pytest.raises(InputError, match="--train-objects '\\*nothing\\*': matches none"):
+        SplitData(named, "object_wise", "train", objects_matching="*nothing*")
+    with pytest.raises(InputError, match="beyond its card's 0 objects"):
+        SplitData(dataset, "object_wise", "train", objects_matching="*household*")
+
+
 def test_split_subset_draws_from_the_split_itself(dataset):
     # The fit check's subset: datapoints of the (possibly already subsampled) training split only,
     # the requested count of them, each once, seeded, in whole shards but the last.

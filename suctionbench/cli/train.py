@@ -56,6 +56,7 @@ def train_command(dataset: Path | str, out: Path | str, config: Any) -> str:
         str(config.epochs), "--device", config.device, "--split", config.split, "--batch-size", str(config.batch_size),
         *(["--max-datapoints", str(config.max_train_datapoints)] if config.max_train_datapoints else []),
         *(["--max-objects", str(config.max_train_objects)] if config.max_train_objects else []),
+        *(["--train-objects", config.train_objects] if config.train_objects is not None else []),
         *(["--max-val-datapoints", str(config.max_val_datapoints)] if config.max_val_datapoints else []),
         "--augment" if config.augment.enabled else "--no-augment",
         *(["--no-augment-noise"] if config.augment.enabled and not config.augment.noise else []),
@@ -84,6 +85,9 @@ def train_cmd(
     max_objects: Annotated[int | None, typer.Option(
         help="Train only on the datapoints of a random subset of this many training objects (before "
              "--max-datapoints: with both, object diversity at a fixed datapoint count).")] = None,
+    train_objects: Annotated[str | None, typer.Option(
+        help="Train only on the training objects whose key matches this shell pattern, e.g. '*household*' "
+             "(before --max-objects and --max-datapoints; the held-out side is not filtered).")] = None,
     max_val_datapoints: Annotated[int | None, typer.Option(
         help="Validate on a random subset of this many (after every epoch).")] = None,
     augment: Annotated[bool, typer.Option(help="Noise and symmetrisation augmentation (gqcnn's).")] = True,
@@ -119,6 +123,7 @@ def train_cmd(
 
         config = TrainConfig(arch=arch, epochs=epochs, device=device, split=split, batch_size=batch_size,
                              max_train_datapoints=max_datapoints, max_train_objects=max_objects,
+                             train_objects=train_objects,
                              max_val_datapoints=max_val_datapoints,
                              augment=(AUGMENT_GQCNN if augment_noise else AUGMENT_FLIPS) if augment else AUGMENT_OFF,
                              target=target, seed=seed,

@@ -82,6 +82,7 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import fnmatch
 import math
 import queue
 import threading
@@ -94,7 +95,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from suctionbench.dataset.storage import DatasetReader, read_split
+from suctionbench.dataset.storage import DatasetReader, read_card, read_split
 from suctionbench.errors import InputError
 from suctionbench.sensing.noise import DepthNoiseConfig, apply_depth_noise_torch
 from suctionbench.sensing.thumbnails import ThumbnailConfig
@@ -437,6 +438,20 @@ def _of_random_objects(indices: np.ndarray, objects_of: np.ndarray, count: int,
     return indices[np.isin(objects_of, rng.choice(objects, size=count, replace=False))]
 
 
+def _of_matching_objects(indices: np.ndarray, objects_of: np.ndarray, keys: list[str], pattern: str,
+                         source: str) -> np.ndarray:
+    """The `indices` whose object's key (`keys[objects_of]`, e.g. 'train/train_00001_household')
+    matches the shell-style `pattern` (`fnmatch`); InputError naming `source` when none does."""
+    ids = np.unique(objects_of)
+    if len(ids) and int(ids.max()) >= len(keys):
+        raise InputError(f"{source}: object ids beyond its card's {len(keys)} objects")
+    chosen = [i for i in ids.tolist() if fnmatch.fnmatchcase(str(keys[i]), pattern)]
+    if not chosen:
+        raise InputError(f"--train-objects '{pattern}': matches none of the {len(ids)} objects of {source} "
+                         f"(keys look like '{keys[int(ids[0])] if len(ids) else ''}')")
+    return indices[np.isin(objects_of, chosen)]
+
+
 class SplitData:
     """One side of a dataset split (e.g. image-wise train), read shard by shard.
 
@@ -444,8 +459,10 @@ class SplitData:
     `batches` streams them. `max_datapoints` keeps a random subset (drawn with `subset_rng`) for
     quick runs; `max_objects` first keeps only the datapoints of that many of the split's objects
     (drawn with the same generator): a learning curve over object diversity at a fixed datapoint
-    count, which the object-wise held-out accuracy depends on. `image_channels` 2 also reads the
-    context thumbnails (InputError if the dataset's shards of the split do not store them).
+    count, which the object-wise held-out accuracy depends on. `objects_matching` (a shell pattern
+    of object keys, e.g. '*household*') keeps only those objects' datapoints, before either.
+    `image_channels` 2 also reads the context thumbnails (InputError if the dataset's shards of
+    the split do not store them).
     `load_threads` threads read a pool's shards at once (hashing and decompression release the
     GIL): a GPU trains faster than one thread reads; the pool's order, hence every batch, is the
     same for any count.
@@ -454,7 +471,7 @@ class SplitData:
     def __init__(self, directory: str | Path, kind: str, part: str, *, max_datapoints: int | None = None,
                  subset_rng: np.random.Generator | None = None, reader: DatasetReader | None = None,
                  image_channels: int = 1, object_context: bool = False, load_threads: int = 1,
-                 max_objects: int | None = None):
+                 max_objects: int | None = None, objects_matching: str | None = None):
         if image_channels not in (1, 2):
             raise InputError(f"image_channels {image_channels!r}: must be 1 (grasp thumbnail) or 2 (grasp, context)")
         self.reader = reader or DatasetReader(directory)
@@ -465,6 +482,11 @@ class SplitData:
         rng = subset_rng or np.random.default_rng(0)
         if self.reader.num_shards == 0 or self.reader.datapoints_per_shard is None:
             raise InputError(f"dataset '{self.reader.directory}': no complete shards")
+        if objects_matching is not None:
+            self._local = self._by_shard(indices)  # so `values` reads the split's objects
+            keys = read_card(self.reader.directory).get("objects") or []
+            indices = _of_matching_objects(indices, self.values(OBJECT_FIELD), keys, objects_matching,
+                                           f"the {kind}/{part} split of '{self.reader.directory}'")
         if max_objects is not None:
             self._local = self._by_shard(indices)  # so `values` reads the split's objects
             indices = _of_random_objects(indices, self.values(OBJECT_FIELD), max_objects, rng)

@@ -237,7 +237,7 @@ def _resume_key(config: TrainConfig, card: dict[str, Any], reader: DatasetReader
                 val_data: SplitData) -> dict[str, Any]:
     """What must match for a checkpoint to be resumed: the config (bar `RESUME_IGNORES`) and the data."""
     settings = {k: v for k, v in to_dict(config).items() if k not in RESUME_IGNORES}
-    for key in ("average", "max_train_objects"):  # runs from before these existed resume as they were
+    for key in ("average", "max_train_objects", "train_objects"):  # runs from before these existed resume as they were
         if settings[key] is None:
             del settings[key]
     data = {"fingerprint": card.get("fingerprint"), "datapoints": reader.num_datapoints,
@@ -454,7 +454,7 @@ def train(dataset_dir: str | Path, out_dir: str | Path, config: TrainConfig | No
     reads = {"image_channels": channels, "object_context": pose_dim_of(config.arch) > POSE_DIM,
              "load_threads": config.load_threads}
     train_data = SplitData(dataset_dir, config.split, "train", max_datapoints=config.max_train_datapoints,
-                           max_objects=config.max_train_objects,
+                           max_objects=config.max_train_objects, objects_matching=config.train_objects,
                            subset_rng=np.random.default_rng(seq_subset), reader=reader, **reads)
     val_data = SplitData(dataset_dir, config.split, "val", max_datapoints=config.max_val_datapoints,
                          subset_rng=np.random.default_rng(seq_val), reader=reader, **reads)

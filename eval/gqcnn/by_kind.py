@@ -34,7 +34,7 @@ def main(dataset: str, models: list[str]) -> None:
         scored = score_model(model, data, threshold)
         q, labels, cut = scored["scores"], scored["labels"], scored["decision_threshold"]
         kinds = np.array([str(keys[i]).rsplit("_", 1)[-1] for i in data.values("object_labels")])
-        rows[path] = {"all": (len(q), float(np.mean((q > cut) == (labels == 1))), average_precision(labels, q))}
+        rows[path] = {"all": (len(q), scored["accuracy"], scored["ap"])}
         for kind in sorted(set(kinds.tolist())):
             part = kinds == kind
             rows[path][kind] = (int(part.sum()), float(np.mean((q[part] > cut) == (labels[part] == 1))),

@@ -30,35 +30,41 @@ FLIPS = ((False, False), (True, False), (False, True), (True, True))
 """(rows, columns) flipped: identity, up-down, left-right, both (the 180 deg rotation)."""
 
 
-def flip_scores(model, data, threshold: float) -> tuple[np.ndarray, np.ndarray]:
-    """q (4, N) of every datapoint under each of FLIPS, and the labels (N,), in the split's order."""
-    network = model.network.eval()
-    scores: list[list[np.ndarray]] = [[] for _ in FLIPS]
+def flip_scores(models: dict, data, threshold: float) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Per model, q (4, N) of every datapoint under each of FLIPS; and the labels (N,); in the
+    split's order, the split read once for all models."""
+    scores: dict[str, list[list[np.ndarray]]] = {path: [[] for _ in FLIPS] for path in models}
+    for model in models.values():
+        model.network.eval()
     labels = []
     with torch.no_grad():
         for batch in data.batches(EVAL_BATCH):
             labels.append(labels_of(batch.metric, threshold))
-            images, poses = to_tensors(batch, model.device)
+            images, poses = to_tensors(batch, torch.device("cpu"))
+            n = len(images)
             for k, (rows, cols) in enumerate(FLIPS):
-                n = len(images)
                 flipped, angles = symmetrize(images, poses[:, 1], torch.full((n,), rows), torch.full((n,), cols))
                 flipped_poses = torch.cat([poses[:, :1], angles[:, None], poses[:, 2:]], dim=1)
-                logits = network(*model.stats.normalise(flipped, flipped_poses)).float()
-                scores[k].append(torch.softmax(logits, dim=1)[:, 1].numpy())
-    return np.stack([np.concatenate(s) for s in scores]), np.concatenate(labels)
+                for path, model in models.items():
+                    logits = model.network(*model.stats.normalise(flipped, flipped_poses)).float()
+                    scores[path][k].append(torch.softmax(logits, dim=1)[:, 1].numpy())
+    return {path: np.stack([np.concatenate(s) for s in per_flip]) for path, per_flip in scores.items()}, \
+        np.concatenate(labels)
 
 
 def main(dataset: str, models: list[str]) -> None:
     threshold = label_threshold(read_card(dataset))
-    scored, data, cut = {}, None, None
-    for path in models:
-        model = load_model(path)
-        if data is None:
-            data = model.split_data(dataset, "object_wise", "val")
-            cut = decision_threshold(model.target, threshold)
-        elif decision_threshold(model.target, threshold) != cut:
+    loaded = {path: load_model(path, device="cpu") for path in models}
+    cut = decision_threshold(loaded[models[0]].target, threshold)
+    first = loaded[models[0]]
+    for path, model in loaded.items():
+        if decision_threshold(model.target, threshold) != cut:
             raise SystemExit(f"{path}: another target than {models[0]}'s; their q are not averaged here")
-        scored[path], labels = flip_scores(model, data, threshold)
+        if (model.image_channels, model.pose_dim, model.thumbnail) != (first.image_channels, first.pose_dim,
+                                                                       first.thumbnail):
+            raise SystemExit(f"{path}: reads other inputs than {models[0]}; the split is read once for all")
+    data = first.split_data(dataset, "object_wise", "val")
+    scored, labels = flip_scores(loaded, data, threshold)
     views = data.values("image_labels")
     print(f"{data.num_datapoints} held-out datapoints of {dataset}; decision threshold {cut}")
     print("| q | accuracy | AP | top-q robust |")

@@ -16,6 +16,7 @@ from typing import Any
 from suctionbench.clutter.runner import BinRequest, BinRunner
 from suctionbench.clutter.tasks import BinTask
 from suctionbench.errors import InputError
+from suctionbench.policies.base import IMAGE_KNOWN_STATE_POLICIES
 
 RUN_KIND = "bin"
 """run.json's "kind" for a bin run (single-object runs have none)."""
@@ -81,8 +82,8 @@ def run_bin_eval(task: BinTask, policy: str, out: Path, *, model: str | None = N
 
     if masks not in MASK_SOURCES:
         raise InputError(f"--masks '{masks}': expected one of {', '.join(MASK_SOURCES)}")
-    if policy == "analytic-image":
-        raise InputError("--policy analytic-image: single-object tasks only (it ranks the grasps the image "
+    if policy in IMAGE_KNOWN_STATE_POLICIES:
+        raise InputError(f"--policy {policy}: single-object tasks only (it ranks the grasps the image "
                          "offers on the one object whose state it knows)")
     cup_config = cup_preset(cup)
     resolve_camera(camera)  # a bad camera fails before any work

@@ -69,11 +69,11 @@ class CycleModel:
 
     def compute_time(self, policy: str) -> dict[str, float]:
         """{"sensing_s", "planning_s"} of one attempt of `policy` (a registry name or a user spec)."""
-        if policy in ("analytic", "random-surface"):
-            return {"sensing_s": 0.0, "planning_s": KNOWN_STATE_PLANNING_S}
-        if policy == "analytic-image":  # an image is taken; the ranking itself is the oracle's
-            return {"sensing_s": self.sensing_s, "planning_s": KNOWN_STATE_PLANNING_S}
-        from suctionbench.policies.base import ADV_VARIANTS
+        from suctionbench.policies.base import ADV_VARIANTS, IMAGE_KNOWN_STATE_POLICIES, KNOWN_STATE_POLICIES
+
+        if policy in KNOWN_STATE_POLICIES:  # an oracle's ranking takes no time; a camera frame does
+            return {"sensing_s": self.sensing_s if policy in IMAGE_KNOWN_STATE_POLICIES else 0.0,
+                    "planning_s": KNOWN_STATE_PLANNING_S}
         from suctionbench.policies.plugins import builtin_name
 
         name = builtin_name(policy)

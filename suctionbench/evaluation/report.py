@@ -30,6 +30,7 @@ from suctionbench.evaluation.runner import (
     summarize_run,
 )
 from suctionbench.io import atomic_dir, atomic_path
+from suctionbench.policies.base import KNOWN_STATE_POLICIES, RANKING_POLICIES
 from suctionbench.validate import output_dir
 
 __all__ = ["PAPER_KNOWN", "PAPER_RANDOM", "PAPER_RESULTS", "build_report", "expand_run_dirs",
@@ -38,10 +39,6 @@ __all__ = ["PAPER_KNOWN", "PAPER_RANDOM", "PAPER_RESULTS", "build_report", "expa
 POLICY_ORDER = ("random", "planarity", "centroid", "planarity-centroid", "gqcnn", "fc-gqcnn",
                 "gqcnn-adv", "fc-gqcnn-adv")
 """Row order of the policies x sets table (the paper's, weakest baseline first)."""
-
-RANKING = ("analytic", "analytic-image")
-"""The known-state policies that rank grasps by a 3D metric (`sim.pick.RANKING_POLICIES`, named here
-so that reading a report does not import the simulation): rows of the known-objects table."""
 
 GALLERY_PER_RUN = 6
 """Failed trials of each run shown in the gallery."""
@@ -138,7 +135,7 @@ def _tables(summaries: list[dict[str, Any]]) -> list[Table]:
         success = _percent(s["success_rate"])
         mark = "" if s.get("complete", True) else f" (incomplete {s['trials']}/{s['expected_trials']})"
         mark += seeded(s)
-        if s["policy"] in RANKING:
+        if s["policy"] in RANKING_POLICIES:
             image = s["policy"] == "analytic-image"
             paper = PAPER_KNOWN.get(s["metric"]) if s["set"] == "adversarial" and not image else None
             name = s["metric"] + (" of the image's grasps" if image else "")
@@ -286,7 +283,7 @@ def _write_report(run_dirs: list[Path], summaries: list[dict[str, Any]], all_rec
         tasks.setdefault((label, set_name), set()).add(task)
     for run_dir, summary, records in zip(run_dirs, summaries, all_records, strict=True):
         valid = [r for r in records if r.get("valid")]
-        known = summary["policy"] in RANKING
+        known = summary["policy"] in RANKING_POLICIES
         label = summary["label"] + seeded(summary)
         task = f" ({summary['task']})" if len(tasks[(summary["label"], summary["set"])]) > 1 else ""
         counts = per_object.setdefault(f"{summary['label']} / {summary['set']}{task}", {})  # seeds add up
@@ -305,7 +302,7 @@ def _write_report(run_dirs: list[Path], summaries: list[dict[str, Any]], all_rec
     figures = []
     headline = [{"policy": label, "set": set_name, "success": pool["success"] or 0.0, "ap": pool["ap"]}
                 for (label, _, set_name), runs in studies.items()  # one bar per study, seeds pooled
-                if runs[0]["policy"] not in (*RANKING, "random-surface") for pool in [_pool(runs)]]
+                if runs[0]["policy"] not in KNOWN_STATE_POLICIES for pool in [_pool(runs)]]
     if headline_figure(headline, out / "headline.png", POLICY_ORDER):
         figures.append("headline.png")
     for group in sorted(curves, key=lambda g: _order(g.removesuffix("_known"), "") + (g,)):

@@ -397,7 +397,7 @@ def summarize_run(run_dir: Path, records: list[dict[str, Any]] | None = None) ->
     if records is None:
         records = run_records(run_dir)
     status = run_status(run_dir, run)
-    from suctionbench.sim.pick import RANKING_POLICIES
+    from suctionbench.policies.base import RANKING_POLICIES
 
     label = f"{run['policy']}-{run.get('metric')}" if run["policy"] in RANKING_POLICIES else run["policy"]
     return {"policy": run["policy"], "label": label, "task": run["task"]["name"], "set": run["task"]["set"],

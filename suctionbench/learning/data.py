@@ -438,9 +438,8 @@ def _of_random_objects(indices: np.ndarray, objects_of: np.ndarray, count: int,
     return indices[np.isin(objects_of, rng.choice(objects, size=count, replace=False))]
 
 
-def _of_matching_objects(indices: np.ndarray, objects_of: np.ndarray, keys: list[str], pattern: str,
-                         source: str) -> np.ndarray:
-    """The `indices` whose object's key (`keys[objects_of]`, e.g. 'train/train_00001_household')
+def _matching_objects(objects_of: np.ndarray, keys: list[str], pattern: str, source: str) -> np.ndarray:
+    """Mask of the datapoints whose object's key (`keys[objects_of]`, e.g. 'train/train_00001_household')
     matches the shell-style `pattern` (`fnmatch`); InputError naming `source` when none does."""
     ids = np.unique(objects_of)
     if len(ids) and int(ids.max()) >= len(keys):
@@ -449,7 +448,7 @@ def _of_matching_objects(indices: np.ndarray, objects_of: np.ndarray, keys: list
     if not chosen:
         raise InputError(f"--train-objects '{pattern}': matches none of the {len(ids)} objects of {source} "
                          f"(keys look like '{keys[int(ids[0])] if len(ids) else ''}')")
-    return indices[np.isin(objects_of, chosen)]
+    return np.isin(objects_of, chosen)
 
 
 class SplitData:
@@ -482,14 +481,16 @@ class SplitData:
         rng = subset_rng or np.random.default_rng(0)
         if self.reader.num_shards == 0 or self.reader.datapoints_per_shard is None:
             raise InputError(f"dataset '{self.reader.directory}': no complete shards")
-        if objects_matching is not None:
-            self._local = self._by_shard(indices)  # so `values` reads the split's objects
-            keys = read_card(self.reader.directory).get("objects") or []
-            indices = _of_matching_objects(indices, self.values(OBJECT_FIELD), keys, objects_matching,
-                                           f"the {kind}/{part} split of '{self.reader.directory}'")
-        if max_objects is not None:
-            self._local = self._by_shard(indices)  # so `values` reads the split's objects
-            indices = _of_random_objects(indices, self.values(OBJECT_FIELD), max_objects, rng)
+        if objects_matching is not None or max_objects is not None:
+            self._local = self._by_shard(indices)  # so `values` reads the split's objects, once
+            objects_of = self.values(OBJECT_FIELD)
+            if objects_matching is not None:
+                keys = read_card(self.reader.directory).get("objects") or []
+                keep = _matching_objects(objects_of, keys, objects_matching,
+                                         f"the {kind}/{part} split of '{self.reader.directory}'")
+                indices, objects_of = indices[keep], objects_of[keep]
+            if max_objects is not None:
+                indices = _of_random_objects(indices, objects_of, max_objects, rng)
         if max_datapoints is not None and len(indices) > max_datapoints:
             indices = np.sort(rng.choice(indices, size=max_datapoints, replace=False))
         self._local = self._by_shard(indices)

@@ -18,21 +18,13 @@ from suctionbench.contact.metrics import METRICS
 from suctionbench.errors import InputError
 from suctionbench.objects.build import ObjectRecord
 from suctionbench.objects.registry import load_object
-from suctionbench.policies.base import NoGraspError
+from suctionbench.policies.base import KNOWN_STATE_POLICIES, NoGraspError
 from suctionbench.sensing.camera import resolve_camera
 from suctionbench.sensing.camera_pose import CameraPoseConfig, sample_camera_pose
 from suctionbench.sim.cup import SIM_CUP_DEFAULT, SimCupConfig
 from suctionbench.sim.episode import PickEpisode
 from suctionbench.sim.episode_config import EpisodeConfig, EpisodeResult
 from suctionbench.sim.scene import SceneConfig, build_scene
-
-KNOWN_STATE_POLICIES = ("analytic", "analytic-image", "random-surface")
-"""Policies that see the true object state: rank surface grasps by a 3D metric (the known-state
-upper bound), rank the grasps the depth image offers the image policies by it (that bound over
-what the camera sees: `policies.analytic`), or draw one surface grasp uniformly."""
-
-RANKING_POLICIES = ("analytic", "analytic-image")
-"""The known-state policies that rank by `PickRequest.metric` (their runs are named by it)."""
 
 NO_LABELS: dict[str, Any] = dict.fromkeys(("label_seal", "label_seal_failure", "label_wr", "label_rwr",
                                            "label_scores"))
@@ -298,16 +290,21 @@ class PickRunner:
 
         return body_image(self.scene.model, segmentation) == self.episode.object
 
+    def _sense(self) -> Any:
+        """Take the observation a plan reads (`observe`), keep it for the log, and time it apart
+        from planning (`_sensing_time`)."""
+        start = time.perf_counter()
+        self.observation = self.observe()
+        self._sensing_time = time.perf_counter() - start
+        return self.observation
+
     def _rank_image_candidates(self, mesh: Any, com: np.ndarray) -> Any:
         """`analytic-image`: the grasps an image policy could choose from (drawn as the image
         policies draw theirs, from the same generator), ranked in the true state."""
         from suctionbench.policies.analytic import CANDIDATES, image_candidates, rank_grasps
 
         req = self.request
-        start = time.perf_counter()
-        self.observation = self.observe()
-        self._sensing_time = time.perf_counter() - start
-        points, approaches = image_candidates(self.observation, CANDIDATES, np.random.default_rng((req.seed, 3)))
+        points, approaches = image_candidates(self._sense(), CANDIDATES, np.random.default_rng((req.seed, 3)))
         return rank_grasps(mesh, com, self.record.mass, req.cup, req.seed, points, approaches, metric=req.metric)
 
     def _plan_from_image(self) -> Any:
@@ -316,10 +313,7 @@ class PickRunner:
 
         req = self.request
         policy = cached_policy(req.policy, req.model, req.policy_args)
-        start = time.perf_counter()
-        self.observation = self.observe()
-        self._sensing_time = time.perf_counter() - start
-        action = policy.plan(self.observation, np.random.default_rng((self.request.seed, 3)))
+        action = policy.plan(self._sense(), np.random.default_rng((self.request.seed, 3)))
         rot, origin = self.camera_pose[:3, :3], self.camera_pose[:3, 3]
         cands = action.candidates
         if "points" not in cands:  # a policy that reports no candidates: the grasp is the only one

@@ -17,7 +17,7 @@ from suctionbench.runlog.reader import read_run
 from suctionbench.sim.episode_config import FAILURES
 
 POLICIES = ["random", "centroid", "planarity", "planarity-centroid", "gqcnn", "fc-gqcnn", "gqcnn-adv", "fc-gqcnn-adv",
-            "analytic", "analytic-image", "random-surface"]
+            "analytic", "analytic-image", "analytic-image-uniform", "random-surface"]
 """Every built-in policy: CI's one real pick each (`test_smoke_list_covers_every_policy` keeps it complete)."""
 
 

@@ -104,6 +104,12 @@ def test_the_image_bound_is_a_known_state_row(tmp_path):
     assert row["paper AP / success %"] == "-" and "Novel objects: policies x sets" not in report["tables"]
     timing = report["tables"]["The pick cycle (means per trial)"]
     assert [r["run"] for r in timing] == ["analytic-image-rwr / adversarial"]
+    # ranked believing the density uniform: a row of its own, named for the belief
+    blind = _synthetic_run(tmp_path / "uniform", "analytic-image-uniform", "rwr", [
+        {"success": s, "policy_q": q} for s, q in ((False, 0.9), (True, 0.2))])
+    rows = build_report([bound, blind], tmp_path / "report2")["tables"]["Known objects: top-ranked grasp per 3D metric"]
+    assert [(r["metric"], r["success %"]) for r in rows] == [
+        ("rwr of the image's grasps", 50.0), ("rwr of the image's grasps, uniform density believed", 50.0)]
 
 
 def test_runs_of_several_seeds_are_pooled(tmp_path):

@@ -5,9 +5,11 @@ Per object of SET (runs RUNS/NAME_SET_sSEED, the seeds every NAME has), each NAM
 the share of its chosen grasps the labeller calls robust (rwr > 0.5, the eval's threshold), then the
 objects ordered by how many more trials the first NAME carried than the last. Meant for the bounds:
 `known` (analytic: grasps on the whole mesh ranked in the true state), `img` (analytic-image: the
-grasps the depth image offers, ranked in the true state) and an image policy. The first gap is what
-the view costs (grasps the camera does not offer, normals it reads wrongly), the second what the
-image policy's scoring and search cost.
+grasps the depth image offers, ranked in the true state), `uni` (analytic-image-uniform: the same,
+believing the object of uniform density) and an image policy. The first gap is what the view costs
+(grasps the camera does not offer, normals it reads wrongly), the second what the mass no image
+shows costs a ranker that does not know it, the third what the image policy's scoring and search
+cost beyond that (negative where the network has learned a kind's mass distribution).
 """
 
 from __future__ import annotations

@@ -25,8 +25,8 @@ from suctionbench.errors import InputError
 def eval_cmd(
     policy: Annotated[
         str, typer.Option(help="Policy: gqcnn, planarity-centroid, centroid, planarity, random, analytic, "
-                               "analytic-image, random-surface, an installed plug-in's name, PATH.py:FACTORY or "
-                               "package.module:FACTORY.")
+                               "analytic-image, analytic-image-uniform, random-surface, an installed plug-in's name, "
+                               "PATH.py:FACTORY or package.module:FACTORY.")
     ],
     out: Annotated[Path, typer.Option(help="Run directory (trials/*.mcap, run.json).")],
     set_name: Annotated[str | None, typer.Option("--set", help="Object set (instead of --task).")] = None,

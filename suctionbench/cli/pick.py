@@ -22,10 +22,10 @@ def pick(
         str | None, typer.Option(help="Grasp 'x,y,z,vx,vy,vz' in the object's own frame (default: --policy).")
     ] = None,
     policy: Annotated[
-        str, typer.Option(help="Policy when no --grasp: analytic, analytic-image, random-surface (known state) or an "
-                               "image policy "
-                               "(random, centroid, planarity, planarity-centroid, gqcnn, an installed plug-in's "
-                               "name, PATH.py:FACTORY or package.module:FACTORY).")
+        str, typer.Option(help="Policy when no --grasp: analytic, analytic-image, analytic-image-uniform, "
+                               "random-surface (known state) or an image policy (random, centroid, planarity, "
+                               "planarity-centroid, gqcnn, an installed plug-in's name, PATH.py:FACTORY or "
+                               "package.module:FACTORY).")
     ] = "analytic",
     policy_arg: PolicyArgOpt = None,
     model: Annotated[str | None, typer.Option(help="GQ-CNN model directory (gqcnn policy).")] = None,

@@ -5,7 +5,9 @@ metric of the analytic labeller (the paper's known-objects experiment).
 draws them where the image policies draw theirs instead (valid pixels of the depth image, with the
 normals the camera gives): ranked in the true state, that is the best any scorer of an image
 policy's candidates could do, so the gap between the two bounds is what the view costs and the gap
-below the second is what the scoring costs."""
+below the second is what the scoring costs. Ranked believing the density uniform
+(`uniform_density_com`, `analytic-image-uniform`), the part of the scoring gap that only the
+invisible mass distribution decides separates from the rest."""
 
 from __future__ import annotations
 
@@ -20,7 +22,8 @@ from suctionbench.geometry.sampling import sample_surface_grasps
 from suctionbench.policies.base import NoGraspError, Observation, SamplerConfig, scene_cloud
 
 CANDIDATES = 300
-"""Grasps ranked per plan by the known-state policies (`analytic`, `analytic-image`)."""
+"""Grasps ranked per plan by the known-state policies (`analytic`, `analytic-image`,
+`analytic-image-uniform`)."""
 
 MAX_APPROACH_FROM_VERTICAL = np.radians(60.0)
 """Candidates whose approach is more than this from straight down are skipped: the arm reaches
@@ -72,6 +75,15 @@ def image_candidates(observation: Observation, count: int, rng: np.random.Genera
     _, points, approaches = cloud.grasps_at(rows, cols)
     rotation, origin = observation.camera_pose[:3, :3], observation.camera_pose[:3, 3]
     return points @ rotation.T + origin, approaches @ rotation.T
+
+
+def uniform_density_com(mesh_world: trimesh.Trimesh) -> np.ndarray:
+    """Where the centre of mass of `mesh_world` lies if its density were uniform (its volume's
+    centroid): what `analytic-image-uniform` believes in place of the true one. A jar's paste, a
+    bottle's liquid or a tool's steel blade moves the true centre away from it; no depth image shows
+    that, so ranking with this belief takes from the image bound what only the mass distribution
+    decides."""
+    return np.asarray(mesh_world.center_mass, dtype=float)
 
 
 def rank_grasps(

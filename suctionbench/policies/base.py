@@ -185,16 +185,18 @@ POLICIES: dict[str, str] = {
 """Registered image policies: name -> "module:attribute" of a factory taking keyword arguments.
 Modules are imported on first use (the GQ-CNN policy's model loading pulls in torch)."""
 
-KNOWN_STATE_POLICIES = ("analytic", "analytic-image", "random-surface")
+KNOWN_STATE_POLICIES = ("analytic", "analytic-image", "analytic-image-uniform", "random-surface")
 """Policies that see the true object state, planned in the simulation rather than built from this
 registry: rank surface grasps by a 3D metric (the known-state upper bound), rank the grasps the
 depth image offers the image policies by it (that bound over what the camera sees:
-`policies.analytic`), or draw one surface grasp uniformly."""
+`policies.analytic`), do so believing the object of uniform density (the true shape, pose and mass,
+the centre of mass at the shape's: what no depth image shows taken away), or draw one surface grasp
+uniformly."""
 
-RANKING_POLICIES = ("analytic", "analytic-image")
+RANKING_POLICIES = ("analytic", "analytic-image", "analytic-image-uniform")
 """The known-state policies that rank by a 3D metric (`--metric`; their runs are named by it)."""
 
-IMAGE_KNOWN_STATE_POLICIES = ("analytic-image",)
+IMAGE_KNOWN_STATE_POLICIES = ("analytic-image", "analytic-image-uniform")
 """The known-state policies that draw their grasps from the depth image: they take a camera frame,
 and the one object whose state they know must be the one in view (no bins)."""
 

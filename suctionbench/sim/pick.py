@@ -18,7 +18,7 @@ from suctionbench.contact.metrics import METRICS
 from suctionbench.errors import InputError
 from suctionbench.objects.build import ObjectRecord
 from suctionbench.objects.registry import load_object
-from suctionbench.policies.base import KNOWN_STATE_POLICIES, NoGraspError
+from suctionbench.policies.base import IMAGE_KNOWN_STATE_POLICIES, KNOWN_STATE_POLICIES, NoGraspError
 from suctionbench.sensing.camera import resolve_camera
 from suctionbench.sensing.camera_pose import CameraPoseConfig, sample_camera_pose
 from suctionbench.sim.cup import SIM_CUP_DEFAULT, SimCupConfig
@@ -209,12 +209,13 @@ class PickRunner:
                 point = pose[:3, :3] @ req.grasp[:3] + pose[:3, 3]
                 approach = pose[:3, :3] @ (req.grasp[3:] / np.linalg.norm(req.grasp[3:]))
             elif req.policy in KNOWN_STATE_POLICIES:
-                from suctionbench.policies.analytic import analytic_grasp, random_surface_grasp
+                from suctionbench.policies.analytic import analytic_grasp, random_surface_grasp, uniform_density_com
 
                 if req.policy == "analytic":
                     chosen = analytic_grasp(mesh, com, self.record.mass, req.cup, req.seed, metric=req.metric)
-                elif req.policy == "analytic-image":
-                    chosen = self._rank_image_candidates(mesh, com)
+                elif req.policy in IMAGE_KNOWN_STATE_POLICIES:
+                    chosen = self._rank_image_candidates(mesh, com if req.policy == "analytic-image"
+                                                         else uniform_density_com(mesh))
                 else:
                     chosen = random_surface_grasp(mesh, req.seed)
             else:
@@ -300,7 +301,8 @@ class PickRunner:
 
     def _rank_image_candidates(self, mesh: Any, com: np.ndarray) -> Any:
         """`analytic-image`: the grasps an image policy could choose from (drawn as the image
-        policies draw theirs, from the same generator), ranked in the true state."""
+        policies draw theirs, from the same generator), ranked in the true state (`com`: where the
+        ranking believes the centre of mass; `analytic-image-uniform` passes the shape's)."""
         from suctionbench.policies.analytic import CANDIDATES, image_candidates, rank_grasps
 
         req = self.request

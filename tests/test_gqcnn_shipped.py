@@ -116,3 +116,16 @@ def test_bench_plans_unbatched_reference_passes_what_the_policy_asks_of_the_mode
         policy.model = model
     np.testing.assert_array_equal(reference.pixel, planned.pixel)
     assert abs(reference.q - planned.q) < 1e-4  # one candidate per call: last-bit BLAS differences only
+
+
+def test_the_dagger_candidate_holds_out_the_defaults_objects():
+    # assets/models/gqcnn-dagger2: the default fine-tuned on two rounds of its own dense proposals.
+    # Its held-out and simulated comparisons with the default (its README) are fair only if it never
+    # trained on the 300 objects the default held out: its card must name the same ones, and its
+    # weights (verified against the card's sha256 on load) must be the same net's, read the same way.
+    candidate = load_model(asset_path("models", "gqcnn-dagger2")).card
+    default = load_model(MODEL_DIR).card
+    assert sorted(candidate["dataset"]["held_out_objects"]) == sorted(default["dataset"]["held_out_objects"])
+    assert len(candidate["dataset"]["held_out_objects"]) == 300
+    assert candidate["arch"] == default["arch"] and candidate["dataset"]["thumbnail"] == default["dataset"]["thumbnail"]
+    assert candidate["training"]["status"] == "complete"

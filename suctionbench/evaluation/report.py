@@ -30,7 +30,12 @@ from suctionbench.evaluation.runner import (
     summarize_run,
 )
 from suctionbench.io import atomic_dir, atomic_path
-from suctionbench.policies.base import IMAGE_KNOWN_STATE_POLICIES, KNOWN_STATE_POLICIES, RANKING_POLICIES
+from suctionbench.policies.base import (
+    IMAGE_KNOWN_STATE_POLICIES,
+    KNOWN_STATE_POLICIES,
+    RANKING_POLICIES,
+    UNIFORM_DENSITY_POLICIES,
+)
 from suctionbench.validate import output_dir
 
 __all__ = ["PAPER_KNOWN", "PAPER_RANDOM", "PAPER_RESULTS", "build_report", "expand_run_dirs",
@@ -139,7 +144,7 @@ def _tables(summaries: list[dict[str, Any]]) -> list[Table]:
             image = s["policy"] in IMAGE_KNOWN_STATE_POLICIES
             paper = PAPER_KNOWN.get(s["metric"]) if s["set"] == "adversarial" and not image else None
             name = s["metric"] + (" of the image's grasps" if image else "")
-            name += ", uniform density believed" if s["policy"] == "analytic-image-uniform" else ""
+            name += ", uniform density believed" if s["policy"] in UNIFORM_DENSITY_POLICIES else ""
             known.rows.append({"metric": name + mark, "set": s["set"], "trials": s["trials"],
                                "AP %": _percent(s["ap"]), "success %": success,
                                "paper AP / success %": f"{paper[0]} / {paper[1]}" if paper else "-",

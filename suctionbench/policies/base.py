@@ -200,6 +200,10 @@ IMAGE_KNOWN_STATE_POLICIES = ("analytic-image", "analytic-image-uniform")
 """The known-state policies that draw their grasps from the depth image: they take a camera frame,
 and the one object whose state they know must be the one in view (no bins)."""
 
+UNIFORM_DENSITY_POLICIES = ("analytic-image-uniform",)
+"""The known-state policies that rank believing the object of uniform density: the centre of mass
+at the shape's (`policies.analytic.uniform_density_com`), not the true one."""
+
 MODEL_POLICIES = ("gqcnn", "fc-gqcnn")
 """Built-in policies that read a GQ-CNN model (the `model` option, `--model` on the command line)."""
 

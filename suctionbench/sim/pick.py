@@ -18,7 +18,12 @@ from suctionbench.contact.metrics import METRICS
 from suctionbench.errors import InputError
 from suctionbench.objects.build import ObjectRecord
 from suctionbench.objects.registry import load_object
-from suctionbench.policies.base import IMAGE_KNOWN_STATE_POLICIES, KNOWN_STATE_POLICIES, NoGraspError
+from suctionbench.policies.base import (
+    IMAGE_KNOWN_STATE_POLICIES,
+    KNOWN_STATE_POLICIES,
+    UNIFORM_DENSITY_POLICIES,
+    NoGraspError,
+)
 from suctionbench.sensing.camera import resolve_camera
 from suctionbench.sensing.camera_pose import CameraPoseConfig, sample_camera_pose
 from suctionbench.sim.cup import SIM_CUP_DEFAULT, SimCupConfig
@@ -214,8 +219,8 @@ class PickRunner:
                 if req.policy == "analytic":
                     chosen = analytic_grasp(mesh, com, self.record.mass, req.cup, req.seed, metric=req.metric)
                 elif req.policy in IMAGE_KNOWN_STATE_POLICIES:
-                    chosen = self._rank_image_candidates(mesh, com if req.policy == "analytic-image"
-                                                         else uniform_density_com(mesh))
+                    belief = uniform_density_com(mesh) if req.policy in UNIFORM_DENSITY_POLICIES else com
+                    chosen = self._rank_image_candidates(mesh, belief)
                 else:
                     chosen = random_surface_grasp(mesh, req.seed)
             else:
@@ -302,7 +307,7 @@ class PickRunner:
     def _rank_image_candidates(self, mesh: Any, com: np.ndarray) -> Any:
         """`analytic-image`: the grasps an image policy could choose from (drawn as the image
         policies draw theirs, from the same generator), ranked in the true state (`com`: where the
-        ranking believes the centre of mass; `analytic-image-uniform` passes the shape's)."""
+        ranking believes the centre of mass; `UNIFORM_DENSITY_POLICIES` pass the shape's)."""
         from suctionbench.policies.analytic import CANDIDATES, image_candidates, rank_grasps
 
         req = self.request
